@@ -1,0 +1,28 @@
+/* Internal fixed-point helpers shared by the *_q16 modules. */
+#ifndef PMA_FIXED_INTERNAL_H
+#define PMA_FIXED_INTERNAL_H
+
+#include <stdint.h>
+#include "pma/fixed.h"
+
+/* Round-to-nearest (ties away from zero) right shift of a signed 64-bit
+ * value with |p| < 2^63; defined behaviour for negative values. */
+static inline int64_t pma_rshift_round(int64_t p, unsigned shift)
+{
+    const uint64_t half = (uint64_t)1 << (shift - 1u);
+    if (p >= 0) return (int64_t)(((uint64_t)p + half) >> shift);
+    return -(int64_t)(((uint64_t)(-p) + half) >> shift);
+}
+
+/* Float configuration value to a Q format with `frac` fractional bits,
+ * rounded, saturated to int32 (init-time only; single precision so that no
+ * soft-double code is linked on the targets). */
+static inline int32_t pma_to_q(float x, unsigned frac)
+{
+    const float scaled = x * (float)((uint32_t)1 << frac);   /* exact: power of 2 */
+    if (!(scaled < 2147483520.0f)) return scaled > 0.0f ? INT32_MAX : 0;  /* NaN: 0 */
+    if (!(scaled > -2147483520.0f)) return INT32_MIN;
+    return (int32_t)(scaled >= 0.0f ? scaled + 0.5f : scaled - 0.5f);
+}
+
+#endif /* PMA_FIXED_INTERNAL_H */

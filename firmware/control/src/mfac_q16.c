@@ -1,0 +1,112 @@
+/* CFDL-MFAC, fixed-point variant (see pma/mfac.h). Signals and parameters in
+ * Q16.16; the squares and quotients of the update laws use 64-bit
+ * intermediates (Q32) so that du^2 and phi^2 never saturate mid-computation;
+ * results saturate to Q16.16. eps below 2^-16 acts as one LSB (2^-16). */
+#include "pma/mfac.h"
+#include "pma/status.h"
+
+#include <stddef.h>
+#include "check.h"
+#include "fixed_internal.h"
+
+/* num / den -> Q16.16 (saturated), num and den both with 32 fractional bits,
+ * den > 0. */
+static pma_q16_t div_q32(int64_t num, int64_t den)
+{
+    const int neg = num < 0;
+    const uint64_t un = (uint64_t)(neg ? -num : num);
+    const uint64_t ud = (uint64_t)den;
+    uint64_t q;
+    if (un < ((uint64_t)1 << 46)) {
+        q = ((un << 16) + ud / 2u) / ud;
+    } else {
+        const uint64_t d16 = ud >> 16;
+        q = (d16 == 0u) ? UINT64_MAX : (un + d16 / 2u) / d16;
+    }
+    if (q > (uint64_t)INT32_MAX) return neg ? PMA_Q16_MIN : PMA_Q16_MAX;
+    return neg ? -(pma_q16_t)q : (pma_q16_t)q;
+}
+
+int pma_mfac_init_q16(pma_mfac_q16_t *s, const pma_mfac_config_t *cfg)
+{
+    if (s == NULL) return PMA_ERR_NULL;
+    s->ready = 0;
+    PMA_CHECK(pma_mfac_validate_config(cfg));
+    const float vals[] = {cfg->rho, cfg->phi1, cfg->u_min, cfg->u_max, cfg->u_init};
+    for (unsigned i = 0; i < sizeof vals / sizeof vals[0]; ++i) {
+        PMA_CHECK(pma_check_q16_range(vals[i]));
+    }
+    /* mu and lambda must keep some resolution in Q16.16 */
+    if (cfg->mu < 1.0f / 1024.0f || cfg->lambda < 1.0f / 1024.0f) return PMA_ERR_FIXED_RANGE;
+    if (cfg->mu > 32767.0f || cfg->lambda > 32767.0f) return PMA_ERR_FIXED_RANGE;
+    s->eta = pma_to_q(cfg->eta, 16);
+    s->mu = pma_to_q(cfg->mu, 16);
+    s->rho = pma_to_q(cfg->rho, 16);
+    s->lambda = pma_to_q(cfg->lambda, 16);
+    s->eps = pma_to_q(cfg->eps, 16);
+    if (s->eps == 0 && cfg->eps > 0.0f) s->eps = 1;
+    s->phi1 = pma_to_q(cfg->phi1, 16);
+    if ((s->phi1 < 0 ? -s->phi1 : s->phi1) <= s->eps) return PMA_ERR_FIXED_RANGE;
+    s->u_min = pma_to_q(cfg->u_min, 16);
+    s->u_max = pma_to_q(cfg->u_max, 16);
+    s->u_init = pma_to_q(cfg->u_init, 16);
+    pma_mfac_reset_q16(s);
+    s->ready = 1;
+    return PMA_OK;
+}
+
+void pma_mfac_reset_q16(pma_mfac_q16_t *s)
+{
+    if (s == NULL) return;
+    s->phi = s->phi1;
+    s->u1 = s->u_init;
+    s->u2 = s->u_init;
+    s->y1 = 0;
+    s->k = 0;
+    s->resets = 0;
+    s->flags = 0;
+}
+
+int pma_mfac_step_q16(pma_mfac_q16_t *s, pma_q16_t y_cm, pma_q16_t yref_next_cm, pma_q16_t *u)
+{
+    if (s == NULL || u == NULL) return PMA_ERR_NULL;
+    if (!s->ready) return PMA_ERR_NOT_READY;
+    const pma_q16_t y1 = (s->k == 0) ? y_cm : s->y1;
+    const pma_q16_t du = pma_q16_ssub(s->u1, s->u2);
+    const pma_q16_t dy = pma_q16_ssub(y_cm, y1);
+    /* phi += eta du / (mu + du^2) (dy - phi du) */
+    const int64_t du2_q32 = (int64_t)du * du;
+    const pma_q16_t k1 = div_q32((int64_t)s->eta * du, (int64_t)s->mu * 65536 + du2_q32);
+    const int64_t innov_q32 = (int64_t)dy * 65536 - (int64_t)s->phi * du;
+    const pma_q16_t innov = pma_q16_sat64(pma_rshift_round(innov_q32, 16));
+    pma_q16_t phi = pma_q16_sadd(s->phi, pma_q16_smul(k1, innov));
+    uint32_t flags = 0;
+    const pma_q16_t aphi = phi < 0 ? pma_q16_sneg(phi) : phi;
+    const pma_q16_t adu = du < 0 ? pma_q16_sneg(du) : du;
+    const int sign_flip = (s->phi1 > 0) ? !(phi > 0) : !(phi < 0);
+    if (aphi <= s->eps || adu <= s->eps || sign_flip) {
+        phi = s->phi1;
+        flags |= PMA_MFAC_FLAG_RESET;
+    }
+    /* u = u(k-1) + rho phi / (lambda + phi^2) (y* - y) */
+    const pma_q16_t k2 = div_q32((int64_t)s->rho * phi,
+                                 (int64_t)s->lambda * 65536 + (int64_t)phi * phi);
+    const pma_q16_t v = pma_q16_sadd(s->u1, pma_q16_smul(k2, pma_q16_ssub(yref_next_cm, y_cm)));
+    pma_q16_t out = v;
+    if (v > s->u_max) {
+        out = s->u_max;
+        flags |= PMA_MFAC_FLAG_SAT_HIGH;
+    } else if (v < s->u_min) {
+        out = s->u_min;
+        flags |= PMA_MFAC_FLAG_SAT_LOW;
+    }
+    s->phi = phi;
+    s->u2 = s->u1;
+    s->u1 = out;
+    s->y1 = y_cm;
+    s->k++;
+    if (flags & PMA_MFAC_FLAG_RESET) s->resets++;
+    s->flags = flags;
+    *u = out;
+    return PMA_OK;
+}

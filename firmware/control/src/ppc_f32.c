@@ -1,0 +1,113 @@
+/* The paper's controller, float variant (eq. 15-22; see pma/ppc.h). */
+#include "pma/ppc.h"
+#include "pma/status.h"
+
+#include <stddef.h>
+
+#include <math.h>
+
+#define PI_F 3.14159265358979f
+#define HALF_PI_F 1.57079632679490f
+
+int pma_ppc_init_f32(pma_ppc_f32_t *s, const pma_ppc_config_t *cfg)
+{
+    if (s == NULL) return PMA_ERR_NULL;
+    s->ready = 0;
+    const int rc = pma_ppc_validate_config(cfg);
+    if (rc != PMA_OK) return rc;
+    s->cfg = *cfg;
+    s->inv_w1 = 1.0f / cfg->w1_cm;
+    s->inv_w2 = 1.0f / cfg->w2_cm_s;
+    s->r_max = 1.0f - cfg->barrier_margin;
+    s->soft_r = cfg->soft_barrier_r;
+    s->soft_tan = (cfg->soft_barrier_r < 1.0f) ? tanf(HALF_PI_F * cfg->soft_barrier_r) : 0.0f;
+    s->soft_sec2 = 1.0f + s->soft_tan * s->soft_tan;
+    pma_ppc_reset_f32(s);
+    s->ready = 1;
+    return PMA_OK;
+}
+
+void pma_ppc_reset_f32(pma_ppc_f32_t *s)
+{
+    if (s == NULL) return;
+    s->u_ff = s->cfg.ff_init;
+    s->breaches1 = 0;
+    s->breaches2 = 0;
+    s->out = (pma_ppc_out_f32_t){0};
+    s->out.u_ff = s->u_ff;
+}
+
+/* Error transformation tan(pi r / 2) with the barrier clamp and the optional
+ * soft barrier; writes sec^2 of the same argument. */
+static float transform(const pma_ppc_f32_t *s, float r, float *sec2, uint32_t *flags,
+                       uint32_t barrier_flag, uint32_t soft_flag)
+{
+    float ar = fabsf(r);
+    if (ar >= s->r_max) {
+        *flags |= barrier_flag;
+        ar = s->r_max;
+    }
+    float t;
+    if (ar > s->soft_r) {
+        *flags |= soft_flag;
+        *sec2 = s->soft_sec2;
+        t = s->soft_tan + HALF_PI_F * s->soft_sec2 * (ar - s->soft_r);
+    } else {
+        t = tanf(HALF_PI_F * ar);
+        *sec2 = 1.0f + t * t;
+    }
+    return r < 0.0f ? -t : t;
+}
+
+int pma_ppc_step_f32(pma_ppc_f32_t *s, float t_s, float x_cm, float v_cm_s, float xr_cm,
+                     float *u)
+{
+    if (s == NULL || u == NULL) return PMA_ERR_NULL;
+    if (!s->ready) return PMA_ERR_NOT_READY;
+    if (!isfinite(t_s) || !isfinite(x_cm) || !isfinite(v_cm_s) || !isfinite(xr_cm)) {
+        return PMA_ERR_NOT_FINITE;
+    }
+    if (t_s < 0.0f) return PMA_ERR_RANGE;
+
+    pma_ppc_out_f32_t o = {0};
+    o.alpha = (t_s < s->cfg.t_u_s) ? 0.5f - 0.5f * cosf(PI_F * t_s / s->cfg.t_u_s) : 1.0f; /* 15 */
+    o.e_cm = x_cm - xr_cm;                                                    /* 8 */
+    o.lambda1_cm = o.alpha * o.e_cm;                                          /* 16 */
+    if (!isfinite(o.lambda1_cm)) return PMA_ERR_NOT_FINITE;   /* inputs too far apart */
+    float sec2;
+    o.chi = transform(s, o.lambda1_cm * s->inv_w1, &sec2, &o.flags,
+                      PMA_PPC_FLAG_BARRIER1, PMA_PPC_FLAG_SOFT1);             /* 18 */
+    o.theta_cm_s = -s->cfg.a_per_s * o.chi;                                   /* 17 */
+    o.lambda2_cm_s = o.alpha * v_cm_s - o.theta_cm_s;                         /* 19 */
+    if (!isfinite(o.lambda2_cm_s)) return PMA_ERR_NOT_FINITE;
+    o.delta = transform(s, o.lambda2_cm_s * s->inv_w2, &sec2, &o.flags,
+                        PMA_PPC_FLAG_BARRIER2, PMA_PPC_FLAG_SOFT2);           /* 22 */
+    o.beta_s_cm = sec2 * s->inv_w2;                                           /* 21 */
+    o.u_law = -s->cfg.c * o.beta_s_cm * o.delta;                              /* 20 */
+
+    o.u_ff = s->u_ff;
+    const float v = o.u_ff + o.u_law;
+    if (v > s->cfg.u_max) {
+        o.flags |= PMA_PPC_FLAG_SAT_HIGH;
+        o.u = s->cfg.u_max;
+    } else if (v < s->cfg.u_min) {
+        o.flags |= PMA_PPC_FLAG_SAT_LOW;
+        o.u = s->cfg.u_min;
+    } else {
+        o.u = v;
+    }
+
+    /* optional steady-state feedforward: integrate the law's output unless the
+     * output is saturated in the direction the law pushes (anti-windup) */
+    if (s->cfg.ff_gain_per_s > 0.0f &&
+        !((o.flags & PMA_PPC_FLAG_SAT_HIGH) && o.u_law > 0.0f) &&
+        !((o.flags & PMA_PPC_FLAG_SAT_LOW) && o.u_law < 0.0f)) {
+        float ff = s->u_ff + s->cfg.ff_gain_per_s * s->cfg.period_s * o.u_law;
+        s->u_ff = fminf(fmaxf(ff, s->cfg.u_min), s->cfg.u_max);
+    }
+    if (o.flags & PMA_PPC_FLAG_BARRIER1) s->breaches1++;
+    if (o.flags & PMA_PPC_FLAG_BARRIER2) s->breaches2++;
+    s->out = o;
+    *u = o.u;
+    return PMA_OK;
+}

@@ -1,0 +1,169 @@
+/* The paper's controller, fixed-point variant (see pma/ppc.h).
+ * Signals Q16.16 in the units of the float variant; alpha and the
+ * normalised arguments r = lambda / w in Q2.30; reciprocals 1/w1, 1/w2, 1/t_u
+ * in Q8.24 (so w1, w2, t_u >= 1/64). Every operation saturates. */
+#include "pma/ppc.h"
+#include "pma/status.h"
+
+#include <stddef.h>
+#include "check.h"
+#include "fixed_internal.h"
+
+#define HALF_PI_Q30 ((pma_q30_t)1686629713)   /* pi/2 in Q2.30 */
+#define Q24_MIN_W (1.0f / 64.0f)
+
+int pma_ppc_init_q16(pma_ppc_q16_t *s, const pma_ppc_config_t *cfg)
+{
+    if (s == NULL) return PMA_ERR_NULL;
+    s->ready = 0;
+    PMA_CHECK(pma_ppc_validate_config(cfg));
+    if (cfg->w1_cm < Q24_MIN_W || cfg->w2_cm_s < Q24_MIN_W || cfg->t_u_s < Q24_MIN_W ||
+        cfg->w1_cm > 100.0f || cfg->w2_cm_s > 100.0f) {
+        return PMA_ERR_FIXED_RANGE;
+    }
+    const float q16_vals[] = {cfg->a_per_s, cfg->c, cfg->t_u_s, cfg->u_min, cfg->u_max,
+                              cfg->ff_init};
+    for (unsigned i = 0; i < sizeof q16_vals / sizeof q16_vals[0]; ++i) {
+        PMA_CHECK(pma_check_q16_range(q16_vals[i]));
+    }
+    const float ff_k = cfg->ff_gain_per_s * cfg->period_s;
+    if (ff_k >= 1.0f) return PMA_ERR_FIXED_RANGE;   /* also a sane bound for a per-step gain */
+    /* soft barrier point: tan and sec^2 from the same fixed-point tan (no libm) */
+    const pma_q30_t soft_r = pma_to_q(cfg->soft_barrier_r, 30);
+    int64_t soft_tan = 0, soft_sec2 = PMA_Q16_ONE;
+    if (soft_r < PMA_Q30_ONE) {
+        soft_tan = pma_q16_tan_halfpi(soft_r);
+        soft_sec2 = PMA_Q16_ONE + pma_rshift_round(soft_tan * soft_tan, 16);
+        if (soft_sec2 >= (int64_t)32767 * PMA_Q16_ONE) return PMA_ERR_FIXED_RANGE;
+    }
+    s->a = pma_to_q(cfg->a_per_s, 16);
+    s->c = pma_to_q(cfg->c, 16);
+    s->t_u = pma_to_q(cfg->t_u_s, 16);
+    s->u_min = pma_to_q(cfg->u_min, 16);
+    s->u_max = pma_to_q(cfg->u_max, 16);
+    s->ff_init = pma_to_q(cfg->ff_init, 16);
+    s->inv_w1_q24 = pma_to_q(1.0f / cfg->w1_cm, 24);
+    s->inv_w2_q24 = pma_to_q(1.0f / cfg->w2_cm_s, 24);
+    s->inv_t_u_q24 = pma_to_q(1.0f / cfg->t_u_s, 24);
+    s->ff_k = pma_to_q(ff_k, 30);
+    s->r_max = pma_to_q(1.0f - cfg->barrier_margin, 30);
+    s->soft_r = soft_r;
+    s->soft_tan = (pma_q16_t)soft_tan;
+    s->soft_sec2 = (pma_q16_t)soft_sec2;
+    pma_ppc_reset_q16(s);
+    s->ready = 1;
+    return PMA_OK;
+}
+
+void pma_ppc_reset_q16(pma_ppc_q16_t *s)
+{
+    if (s == NULL) return;
+    s->u_ff_q32 = (int64_t)s->ff_init * 65536;
+    s->breaches1 = 0;
+    s->breaches2 = 0;
+    s->out = (pma_ppc_out_q16_t){0};
+    s->out.u_ff = s->ff_init;
+}
+
+/* r = lambda / w in Q2.30 from lambda with 24 fractional bits (int64, so
+ * the product alpha e is not rounded to Q16.16 before 1/w amplifies it) and
+ * 1/w in Q8.24; clamped to +-r_max (flagging the barrier). |lambda| is
+ * limited to 128 first (then |r| > 1 anyway, since w <= 100), which keeps
+ * the product below 2^63. */
+#define LAMBDA_Q24_LIMIT ((int64_t)1 << 31)
+static pma_q30_t normalise(const pma_ppc_q16_t *s, int64_t lambda_q24, int32_t inv_w_q24,
+                           uint32_t *flags, uint32_t barrier_flag)
+{
+    if (lambda_q24 > LAMBDA_Q24_LIMIT) lambda_q24 = LAMBDA_Q24_LIMIT;
+    if (lambda_q24 < -LAMBDA_Q24_LIMIT) lambda_q24 = -LAMBDA_Q24_LIMIT;
+    const int64_t r = pma_rshift_round(lambda_q24 * inv_w_q24, 18);
+    if (r >= s->r_max) {
+        *flags |= barrier_flag;
+        return s->r_max;
+    }
+    if (r <= -(int64_t)s->r_max) {
+        *flags |= barrier_flag;
+        return -s->r_max;
+    }
+    return (pma_q30_t)r;
+}
+
+/* tan(pi r / 2) with the optional soft barrier; writes sec^2 (Q16.16). */
+static pma_q16_t transform(const pma_ppc_q16_t *s, pma_q30_t r, pma_q16_t *sec2,
+                           uint32_t *flags, uint32_t soft_flag)
+{
+    const pma_q30_t ar = r < 0 ? -r : r;
+    pma_q16_t t;
+    if (ar > s->soft_r) {
+        *flags |= soft_flag;
+        *sec2 = s->soft_sec2;
+        const pma_q16_t slope = pma_q16_smul_q30(s->soft_sec2, HALF_PI_Q30);
+        t = pma_q16_sadd(s->soft_tan, pma_q16_smul_q30(slope, ar - s->soft_r));
+    } else {
+        t = pma_q16_tan_halfpi(ar);
+        *sec2 = pma_q16_sadd(PMA_Q16_ONE, pma_q16_smul(t, t));
+    }
+    return r < 0 ? pma_q16_sneg(t) : t;
+}
+
+static pma_q30_t tuning_alpha(const pma_ppc_q16_t *s, pma_q16_t t)
+{
+    if (t <= 0) return 0;                      /* exact bumpless start */
+    if (t >= s->t_u) return PMA_Q30_ONE;
+    int64_t x = pma_rshift_round((int64_t)t * s->inv_t_u_q24, 10);   /* t/t_u, Q30 */
+    if (x > PMA_Q30_ONE) x = PMA_Q30_ONE;
+    return (PMA_Q30_ONE - pma_q30_cos_pi((pma_q30_t)x)) / 2;          /* 15 */
+}
+
+int pma_ppc_step_q16(pma_ppc_q16_t *s, pma_q16_t t_s, pma_q16_t x_cm, pma_q16_t v_cm_s,
+                     pma_q16_t xr_cm, pma_q16_t *u)
+{
+    if (s == NULL || u == NULL) return PMA_ERR_NULL;
+    if (!s->ready) return PMA_ERR_NOT_READY;
+    if (t_s < 0) return PMA_ERR_RANGE;
+
+    pma_ppc_out_q16_t o = {0};
+    pma_q16_t sec2;
+    o.alpha = tuning_alpha(s, t_s);
+    o.e_cm = pma_q16_ssub(x_cm, xr_cm);                                        /* 8 */
+    const int64_t lambda1_q24 = pma_rshift_round((int64_t)o.e_cm * o.alpha, 22);   /* 16 */
+    o.lambda1_cm = pma_q16_sat64(pma_rshift_round(lambda1_q24, 8));
+    const pma_q30_t r1 = normalise(s, lambda1_q24, s->inv_w1_q24, &o.flags,
+                                   PMA_PPC_FLAG_BARRIER1);
+    o.chi = transform(s, r1, &sec2, &o.flags, PMA_PPC_FLAG_SOFT1);              /* 18 */
+    const int64_t theta_q24 = -pma_rshift_round((int64_t)s->a * o.chi, 8);      /* 17 */
+    o.theta_cm_s = pma_q16_sat64(pma_rshift_round(theta_q24, 8));
+    const int64_t lambda2_q24 =
+        pma_rshift_round((int64_t)v_cm_s * o.alpha, 22) - theta_q24;            /* 19 */
+    o.lambda2_cm_s = pma_q16_sat64(pma_rshift_round(lambda2_q24, 8));
+    const pma_q30_t r2 = normalise(s, lambda2_q24, s->inv_w2_q24, &o.flags,
+                                   PMA_PPC_FLAG_BARRIER2);
+    o.delta = transform(s, r2, &sec2, &o.flags, PMA_PPC_FLAG_SOFT2);            /* 22 */
+    o.beta_s_cm = pma_q16_sat64(pma_rshift_round((int64_t)sec2 * s->inv_w2_q24, 24)); /* 21 */
+    o.u_law = pma_q16_sneg(pma_q16_smul(pma_q16_smul(s->c, o.beta_s_cm), o.delta)); /* 20 */
+
+    o.u_ff = pma_q16_sat64(pma_rshift_round(s->u_ff_q32, 16));
+    const pma_q16_t v = pma_q16_sadd(o.u_ff, o.u_law);
+    if (v > s->u_max) {
+        o.flags |= PMA_PPC_FLAG_SAT_HIGH;
+        o.u = s->u_max;
+    } else if (v < s->u_min) {
+        o.flags |= PMA_PPC_FLAG_SAT_LOW;
+        o.u = s->u_min;
+    } else {
+        o.u = v;
+    }
+
+    if (s->ff_k > 0 &&
+        !((o.flags & PMA_PPC_FLAG_SAT_HIGH) && o.u_law > 0) &&
+        !((o.flags & PMA_PPC_FLAG_SAT_LOW) && o.u_law < 0)) {
+        int64_t ff = s->u_ff_q32 + pma_rshift_round((int64_t)o.u_law * s->ff_k, 14); /* Q32 */
+        const int64_t lo = (int64_t)s->u_min * 65536, hi = (int64_t)s->u_max * 65536;
+        s->u_ff_q32 = ff < lo ? lo : (ff > hi ? hi : ff);
+    }
+    if (o.flags & PMA_PPC_FLAG_BARRIER1) s->breaches1++;
+    if (o.flags & PMA_PPC_FLAG_BARRIER2) s->breaches2++;
+    s->out = o;
+    *u = o.u;
+    return PMA_OK;
+}

@@ -1,0 +1,133 @@
+/* Saturating fixed-point arithmetic and the tan / cos / sin approximations. */
+#include "test_util.h"
+#include "pma/fixed.h"
+
+#define PI 3.14159265358979323846
+
+static void test_sadd_ssub_saturate(void **state)
+{
+    (void)state;
+    assert_int_equal(pma_q16_sadd(PMA_Q16_MAX, 1), PMA_Q16_MAX);
+    assert_int_equal(pma_q16_sadd(PMA_Q16_MIN, -1), PMA_Q16_MIN);
+    assert_int_equal(pma_q16_sadd(PMA_Q16_MAX, PMA_Q16_MIN), -1);
+    assert_int_equal(pma_q16_sadd(Q16(1.5), Q16(2.25)), Q16(3.75));
+    assert_int_equal(pma_q16_ssub(PMA_Q16_MIN, 1), PMA_Q16_MIN);
+    assert_int_equal(pma_q16_ssub(PMA_Q16_MAX, -1), PMA_Q16_MAX);
+    assert_int_equal(pma_q16_ssub(0, PMA_Q16_MIN), PMA_Q16_MAX);
+    assert_int_equal(pma_q16_ssub(-1, PMA_Q16_MAX), PMA_Q16_MIN);
+    assert_int_equal(pma_q16_ssub(Q16(1.0), Q16(3.5)), Q16(-2.5));
+    assert_int_equal(pma_q16_sneg(PMA_Q16_MIN), PMA_Q16_MAX);
+    assert_int_equal(pma_q16_sneg(Q16(2.0)), Q16(-2.0));
+}
+
+static void test_smul_rounds_and_saturates(void **state)
+{
+    (void)state;
+    assert_int_equal(pma_q16_smul(Q16(1.5), Q16(-2.0)), Q16(-3.0));
+    assert_int_equal(pma_q16_smul(Q16(300.0), Q16(300.0)), PMA_Q16_MAX);
+    assert_int_equal(pma_q16_smul(Q16(-300.0), Q16(300.0)), PMA_Q16_MIN);
+    /* 1 LSB x 0.5 = half an LSB: ties round away from zero, symmetric in sign */
+    assert_int_equal(pma_q16_smul(1, Q16(0.5)), 1);
+    assert_int_equal(pma_q16_smul(-1, Q16(0.5)), -1);
+    assert_int_equal(pma_q16_smul(1, Q16(0.25)), 0);
+    assert_int_equal(pma_q16_smul_q30(Q16(3.0), PMA_Q30_ONE / 2), Q16(1.5));
+    assert_int_equal(pma_q16_smul_q30(PMA_Q16_MAX, -2 * PMA_Q30_ONE), PMA_Q16_MIN);
+}
+
+static void test_sdiv(void **state)
+{
+    (void)state;
+    assert_int_equal(pma_q16_sdiv(Q16(3.0), Q16(2.0)), Q16(1.5));
+    assert_int_equal(pma_q16_sdiv(Q16(-3.0), Q16(2.0)), Q16(-1.5));
+    assert_int_equal(pma_q16_sdiv(Q16(1.0), Q16(3.0)), 21845);      /* 0.333328, rounded */
+    assert_int_equal(pma_q16_sdiv(Q16(-1.0), Q16(3.0)), -21845);
+    assert_int_equal(pma_q16_sdiv(Q16(1000.0), Q16(0.001)), PMA_Q16_MAX);
+    assert_int_equal(pma_q16_sdiv(Q16(-1000.0), Q16(0.001)), PMA_Q16_MIN);
+    assert_int_equal(pma_q16_sdiv(Q16(5.0), 0), PMA_Q16_MAX);
+    assert_int_equal(pma_q16_sdiv(Q16(-5.0), 0), PMA_Q16_MIN);
+    assert_int_equal(pma_q16_sdiv(0, 0), 0);
+    assert_int_equal(pma_q16_sdiv(PMA_Q16_MIN, -PMA_Q16_ONE), PMA_Q16_MAX);
+}
+
+static void test_conversions(void **state)
+{
+    (void)state;
+    assert_int_equal(pma_q16_from_f32(NAN), 0);
+    assert_int_equal(pma_q16_from_f32(INFINITY), PMA_Q16_MAX);
+    assert_int_equal(pma_q16_from_f32(-INFINITY), PMA_Q16_MIN);
+    assert_int_equal(pma_q16_from_f32(1e9f), PMA_Q16_MAX);
+    assert_int_equal(pma_q16_from_f32(-2.5f), -163840);
+    assert_near(pma_q16_to_f32(Q16(-2.0)), -2.0, 0.0);
+    assert_int_equal(pma_q16_clamp(Q16(5.0), Q16(-1.0), Q16(1.0)), Q16(1.0));
+    assert_int_equal(pma_q16_sat64((int64_t)1 << 40), PMA_Q16_MAX);
+}
+
+/* tan(pi r / 2): error <= 1 LSB + |tan| (2e-6 + 2^-31 / (1 - r^2)) over the
+ * whole open interval (grid dense near the pole), odd, saturating. */
+static void test_tan_halfpi_accuracy(void **state)
+{
+    (void)state;
+    double worst = 0.0;
+    for (int i = -4000; i <= 4000; ++i) {
+        /* r = sign * (1 - 10^(-k)) spacing near the pole, linear elsewhere */
+        double r = i / 4000.0 * 0.99;
+        if (i > 3990) r = 1.0 - pow(10.0, -2.0 - (i - 3990) * 0.35);
+        if (i < -3990) r = -(1.0 - pow(10.0, -2.0 - (-i - 3990) * 0.35));
+        const pma_q30_t rq = (pma_q30_t)llround(r * 1073741824.0);
+        const double exact = tan(PI / 2.0 * (rq / 1073741824.0));
+        if (fabs(exact) > 32000.0) continue;
+        const double got = pma_q16_tan_halfpi(rq) / 65536.0;
+        const double rr = rq / 1073741824.0;
+        const double bound = 1.0 / 65536.0 + fabs(exact) * (2e-6 + 0x1p-31 / (1.0 - rr * rr));
+        const double err = fabs(got - exact) / bound;
+        if (err > worst) worst = err;
+        assert_int_equal(pma_q16_tan_halfpi(-rq), -pma_q16_tan_halfpi(rq));
+    }
+    print_message("tan_halfpi: worst error / stated bound = %.3f\n", worst);
+    assert_true(worst <= 1.0);
+    assert_int_equal(pma_q16_tan_halfpi(0), 0);
+    assert_int_equal(pma_q16_tan_halfpi(PMA_Q30_ONE / 2), PMA_Q16_ONE);   /* tan(pi/4) = 1 */
+    assert_int_equal(pma_q16_tan_halfpi(PMA_Q30_ONE), PMA_Q16_MAX);
+    assert_int_equal(pma_q16_tan_halfpi(-PMA_Q30_ONE), PMA_Q16_MIN);
+    assert_int_equal(pma_q16_tan_halfpi(PMA_Q30_ONE + 5), PMA_Q16_MAX);
+    assert_int_equal(pma_q16_tan_halfpi(PMA_Q30_ONE - 1), PMA_Q16_MAX);  /* 6.8e8 > range */
+}
+
+static void test_cos_sin_accuracy(void **state)
+{
+    (void)state;
+    double worst_cos = 0.0, worst_sin = 0.0;
+    for (int i = -20000; i < 20000; ++i) {
+        const pma_q30_t sq = (pma_q30_t)((int64_t)i * 107374 + 12345);   /* s in [-2, 2) */
+        const double exact = cos(PI * (sq / 1073741824.0));
+        const double err = fabs(pma_q30_cos_pi(sq) / 1073741824.0 - exact);
+        if (err > worst_cos) worst_cos = err;
+    }
+    for (uint32_t k = 0; k < 40000; ++k) {
+        const uint32_t f = k * 107371u + 7u;
+        const double exact = sin(2.0 * PI * (f / 4294967296.0));
+        const double err = fabs(pma_q30_sin_2pi_frac32(f) / 1073741824.0 - exact);
+        if (err > worst_sin) worst_sin = err;
+    }
+    print_message("cos_pi max error %.3g, sin_2pi max error %.3g\n", worst_cos, worst_sin);
+    assert_true(worst_cos < 1e-7);
+    assert_true(worst_sin < 1e-7);
+    assert_int_equal(pma_q30_cos_pi(0), PMA_Q30_ONE);           /* alpha(0) = 0 exactly */
+    assert_int_equal(pma_q30_cos_pi(PMA_Q30_ONE), -PMA_Q30_ONE);
+    assert_near(pma_q30_sin_2pi_frac32(0) / 1073741824.0, 0.0, 1e-7);
+    assert_near(pma_q30_sin_2pi_frac32(0x40000000u) / 1073741824.0, 1.0, 1e-7);
+    assert_near(pma_q30_sin_2pi_frac32(0xC0000000u) / 1073741824.0, -1.0, 1e-7);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_sadd_ssub_saturate),
+        cmocka_unit_test(test_smul_rounds_and_saturates),
+        cmocka_unit_test(test_sdiv),
+        cmocka_unit_test(test_conversions),
+        cmocka_unit_test(test_tan_halfpi_accuracy),
+        cmocka_unit_test(test_cos_sin_accuracy),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
