@@ -75,7 +75,7 @@ static void bench_ppc(uint32_t e_f, uint32_t e_q)
 {
     pma_ppc_config_t c;
     pma_ppc_default_config(&c);
-    c.t_u_s = 1e6f;   /* keep t < t_u: the tuning function's cos is evaluated every step */
+    c.t_u_s = 1000.0f;   /* t = 500 < t_u: the tuning function's cos is evaluated every step */
     pma_ppc_f32_t f;
     pma_ppc_q16_t q;
     pma_velest_config_t vc;
@@ -86,10 +86,12 @@ static void bench_ppc(uint32_t e_f, uint32_t e_q)
     pma_q16_t uq, vqv;
     for (int during = 1; during >= 0; --during) {
         if (!during) c.t_u_s = 2.0f;   /* after t_u: alpha = 1, no cos */
-        const float t = during ? 1000.0f : 10.0f;
+        const float t = during ? 500.0f : 10.0f;
         const pma_q16_t tq = pma_q16_from_f32(t);
-        pma_ppc_init_f32(&f, &c);
-        pma_ppc_init_q16(&q, &c);
+        if (pma_ppc_init_f32(&f, &c) != 0 || pma_ppc_init_q16(&q, &c) != 0) {
+            printf("BENCH setup failed: ppc init\n");
+            return;
+        }
         pma_board_timer_start();
         for (uint32_t k = 0; k < N; ++k) {
             pma_ppc_step_f32(&f, t, tx[k % TABLE], tv[k % TABLE], tr[k % TABLE], &u);
@@ -195,6 +197,24 @@ static void bench_velest_ref(uint32_t e_f, uint32_t e_q)
     sink_q = vq + xq + dq;
 }
 
+static void bench_fixed(uint32_t e_q)
+{
+    pma_q16_t acc = 0;
+    pma_board_timer_start();
+    for (uint32_t k = 0; k < N; ++k) acc += pma_q16_tan_halfpi(qv[k % TABLE] * 16384);
+    report("q16_tan_halfpi", per_step(pma_board_timer_elapsed_ns(), e_q));
+    pma_board_timer_start();
+    for (uint32_t k = 0; k < N; ++k) acc += pma_q30_cos_pi(qv[k % TABLE] * 16384);
+    report("q30_cos_pi", per_step(pma_board_timer_elapsed_ns(), e_q));
+    pma_board_timer_start();
+    for (uint32_t k = 0; k < N; ++k) acc += pma_q16_smul(qx[k % TABLE], qv[k % TABLE]);
+    report("q16_smul", per_step(pma_board_timer_elapsed_ns(), e_q));
+    pma_board_timer_start();
+    for (uint32_t k = 0; k < N; ++k) acc += pma_q16_sdiv(qv[k % TABLE], qx[k % TABLE]);
+    report("q16_sdiv", per_step(pma_board_timer_elapsed_ns(), e_q));
+    sink_q = acc;
+}
+
 int main(void)
 {
     fill_inputs();
@@ -202,5 +222,6 @@ int main(void)
     bench_ppc(e_f, e_q);
     bench_mfac_pid(e_f, e_q);
     bench_velest_ref(e_f, e_q);
+    bench_fixed(e_q);
     return 0;
 }

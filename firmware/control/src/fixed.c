@@ -6,50 +6,6 @@
 
 #include <math.h>
 
-#define SIGN32 0x80000000u
-
-pma_q16_t pma_q16_sat64(int64_t a)
-{
-    if (a > INT32_MAX) return PMA_Q16_MAX;
-    if (a < INT32_MIN) return PMA_Q16_MIN;
-    return (pma_q16_t)a;
-}
-
-pma_q16_t pma_q16_sadd(pma_q16_t a, pma_q16_t b)
-{
-    uint32_t ua = (uint32_t)a, ub = (uint32_t)b, sum = ua + ub;
-    /* overflow iff the operands share a sign and the sum does not */
-    if (!((ua ^ ub) & SIGN32) && ((ua ^ sum) & SIGN32)) {
-        return (ua & SIGN32) ? PMA_Q16_MIN : PMA_Q16_MAX;
-    }
-    return (pma_q16_t)sum;
-}
-
-pma_q16_t pma_q16_ssub(pma_q16_t a, pma_q16_t b)
-{
-    uint32_t ua = (uint32_t)a, ub = (uint32_t)b, diff = ua - ub;
-    /* overflow iff the operands differ in sign and the result's sign is b's */
-    if (((ua ^ ub) & SIGN32) && ((ua ^ diff) & SIGN32)) {
-        return (ua & SIGN32) ? PMA_Q16_MIN : PMA_Q16_MAX;
-    }
-    return (pma_q16_t)diff;
-}
-
-pma_q16_t pma_q16_sneg(pma_q16_t a)
-{
-    return a == PMA_Q16_MIN ? PMA_Q16_MAX : -a;
-}
-
-pma_q16_t pma_q16_smul(pma_q16_t a, pma_q16_t b)
-{
-    return pma_q16_sat64(pma_rshift_round((int64_t)a * b, 16));
-}
-
-pma_q16_t pma_q16_smul_q30(pma_q16_t a, pma_q30_t b)
-{
-    return pma_q16_sat64(pma_rshift_round((int64_t)a * b, 30));
-}
-
 pma_q16_t pma_q16_sdiv(pma_q16_t a, pma_q16_t b)
 {
     const int neg = (a < 0) != (b < 0);
@@ -64,11 +20,6 @@ pma_q16_t pma_q16_sdiv(pma_q16_t a, pma_q16_t b)
         return q > (uint64_t)INT32_MAX + 1u ? PMA_Q16_MIN : (pma_q16_t)(-(int64_t)q);
     }
     return q > (uint64_t)INT32_MAX ? PMA_Q16_MAX : (pma_q16_t)q;
-}
-
-pma_q16_t pma_q16_clamp(pma_q16_t a, pma_q16_t lo, pma_q16_t hi)
-{
-    return a < lo ? lo : (a > hi ? hi : a);
 }
 
 pma_q16_t pma_q16_from_f32(float x)
@@ -90,13 +41,81 @@ float pma_q30_to_f32(pma_q30_t a)
     return (float)a * (1.0f / 1073741824.0f);
 }
 
-/* tan(pi r / 2) = r g(r^2) / (1 - r^2); g(u) = sum G_k u^k, least-squares fit
- * weighted for relative error on [0, 1) (tools/fit_fixed_poly.py): max
- * relative error 1.4e-6. Coefficients in Q2.30. */
-#define TAN_G0 ((int64_t)1686631833)   /*  1.5707983011850581 */
-#define TAN_G1 ((int64_t)-299496310)   /* -0.2789276745391055 */
-#define TAN_G2 ((int64_t)-17785356)    /* -0.0165639033588072 */
-#define TAN_G3 ((int64_t)-2217795)     /* -0.0020654821500586 */
+/* round(a b / 2^shift) for unsigned operands, 1 <= shift <= 31, result
+ * < 2^32. ARMv6-M builds the 64-bit product from 16 x 16 partial products;
+ * elsewhere one UMULL. */
+static inline uint32_t umul_shift(uint32_t a, uint32_t b, unsigned shift)
+{
+#if defined(__ARM_ARCH_6M__)
+    const uint32_t al = a & 0xFFFFu, ah = a >> 16, bl = b & 0xFFFFu, bh = b >> 16;
+    const uint32_t lo = al * bl;
+    const uint32_t m1 = ah * bl + (lo >> 16);
+    const uint32_t m2 = al * bh + (m1 & 0xFFFFu);
+    uint32_t hi = ah * bh + (m1 >> 16) + (m2 >> 16);
+    const uint32_t low = (m2 << 16) | (lo & 0xFFFFu);
+    const uint32_t low_r = low + ((uint32_t)1 << (shift - 1u));
+    hi += low_r < low;                     /* carry of the rounding add */
+    return (hi << (32u - shift)) | (low_r >> shift);
+#else
+    return (uint32_t)(((uint64_t)a * b + ((uint64_t)1 << (shift - 1u))) >> shift);
+#endif
+}
+
+/* tan(pi r / 2) = r g(r^2) / (1 - r^2); g(u) = G0 - u (G1 + u (G2 + u G3))
+ * with G0..G3 > 0 (signs folded in, so Horner runs in unsigned arithmetic):
+ * least-squares fit weighted for relative error on [0, 1)
+ * (tools/fit_fixed_poly.py), max relative error 1.4e-6. Q2.30. */
+#define TAN_G0 1686631833u   /* 1.5707983011850581 */
+#define TAN_G1 299496310u    /* 0.2789276745391055 */
+#define TAN_G2 17785356u     /* 0.0165639033588072 */
+#define TAN_G3 2217795u      /* 0.0020654821500586 */
+
+/* round(num 2^16 / den) for num < 2^31, 0 < den <= 2^30, with 32-bit
+ * divisions only (64-bit division is a long library routine on every core).
+ * Integer parts of 2^15 and more saturate to INT32_MAX. The integer part
+ * comes from one division; the 16 fraction bits
+ *  - ARMv6-M (no divide instruction; the library division costs ~80
+ *    instructions): from restoring division, two bits per loop pass;
+ *  - elsewhere (hardware UDIV): from two divisions of 8 bits each, with den
+ *    and the remainder scaled below 2^24 so that remainder << 8 fits 32 bits;
+ *    dropping at most 6 low bits of a den >= 2^24 costs a relative error
+ *    < 2^-18, under a quarter LSB of the result. */
+static uint32_t udiv_q16(uint32_t num, uint32_t den)
+{
+    const uint32_t q = num / den;
+    if (q >= 32768u) return (uint32_t)INT32_MAX;
+    uint32_t r = num - q * den;                /* r < den <= 2^30 */
+#if defined(__ARM_ARCH_6M__)
+    uint32_t out = q;
+    for (int i = 0; i < 8; ++i) {
+        r <<= 1;
+        out <<= 1;
+        if (r >= den) {
+            r -= den;
+            out |= 1u;
+        }
+        r <<= 1;
+        out <<= 1;
+        if (r >= den) {
+            r -= den;
+            out |= 1u;
+        }
+    }
+#else
+    if (den >= ((uint32_t)1 << 24)) {
+        r >>= 6;
+        den >>= 6;
+    }
+    r <<= 8;
+    const uint32_t f1 = r / den;               /* < 2^8 */
+    r = (r - f1 * den) << 8;
+    const uint32_t f2 = r / den;               /* < 2^8 */
+    r -= f2 * den;
+    uint32_t out = (q << 16) | (f1 << 8) | f2;
+#endif
+    if (r >= den - r) out++;                   /* round half up (2r >= den) */
+    return out > (uint32_t)INT32_MAX ? (uint32_t)INT32_MAX : out;
+}
 
 pma_q16_t pma_q16_tan_halfpi(pma_q30_t r)
 {
@@ -104,43 +123,41 @@ pma_q16_t pma_q16_tan_halfpi(pma_q30_t r)
     const int neg = r < 0;
     const uint32_t ar = neg ? (uint32_t)0 - (uint32_t)r : (uint32_t)r;
     if (ar >= (uint32_t)PMA_Q30_ONE) return neg ? PMA_Q16_MIN : PMA_Q16_MAX;
-    const int64_t u = (int64_t)(((uint64_t)ar * ar + (1u << 29)) >> 30);   /* r^2, Q30 */
-    int64_t g = TAN_G3;
-    g = TAN_G2 + pma_rshift_round(g * u, 30);
-    g = TAN_G1 + pma_rshift_round(g * u, 30);
-    g = TAN_G0 + pma_rshift_round(g * u, 30);                                     /* Q30, > 1.27 */
-    const uint64_t num = ((uint64_t)ar * (uint64_t)g + (1u << 29)) >> 30;   /* r g, Q30 */
-    const uint64_t den = (uint64_t)PMA_Q30_ONE - (uint64_t)u;               /* 1 - r^2 > 0 */
-    const uint64_t q = ((num << 16) + den / 2u) / den;                       /* Q16 */
-    if (q > (uint64_t)INT32_MAX) return neg ? PMA_Q16_MIN : PMA_Q16_MAX;
-    return neg ? -(pma_q16_t)q : (pma_q16_t)q;
+    const uint32_t u = umul_shift(ar, ar, 30);                  /* r^2, Q30, < 1 */
+    uint32_t h = TAN_G2 + umul_shift(TAN_G3, u, 30);
+    h = TAN_G1 + umul_shift(h, u, 30);
+    const uint32_t g = TAN_G0 - umul_shift(h, u, 30);           /* Q30, in [1.27, 1.571] */
+    const uint32_t num = umul_shift(ar, g, 30);                 /* r g, Q30 */
+    const uint32_t den = (uint32_t)PMA_Q30_ONE - u;             /* 1 - r^2 > 0 */
+    const pma_q16_t q = (pma_q16_t)udiv_q16(num, den);
+    return neg ? -q : q;
 }
 
-/* cos(pi s) = 1 + x (C1 + x (C2 + x (C3 + x C4))), x = s^2, |s| <= 1/2;
- * least-squares fit with cos(0) = 1 exactly: max abs error 5.5e-8.
- * Coefficients in Q4.28 (they exceed 2). */
-#define COS_C1 ((int64_t)-1324674033)  /* -4.9347953240805404 */
-#define COS_C2 ((int64_t)1089431141)   /*  4.0584472586995    */
-#define COS_C3 ((int64_t)-357574299)   /* -1.3320680658776491 */
-#define COS_C4 ((int64_t)59063867)     /*  0.2200300516253903 */
+/* cos(pi s) = 1 - x (C1 - x (C2 - x (C3 - x C4))), x = s^2, |s| <= 1/2,
+ * C1..C4 > 0 (signs folded in; every bracket stays positive for x <= 1/4,
+ * so Horner runs unsigned); least-squares fit with cos(0) = 1 exactly: max
+ * abs error 5.5e-8. Q4.28 (C1 and C2 exceed 2). */
+#define COS_C1 1324674033u   /* 4.9347953240805404 */
+#define COS_C2 1089431141u   /* 4.0584472586995    */
+#define COS_C3 357574299u    /* 1.3320680658776491 */
+#define COS_C4 59063867u     /* 0.2200300516253903 */
 
 pma_q30_t pma_q30_cos_pi(pma_q30_t s)
 {
     /* fold to s in [0, 1]: cos is even and cos(pi s) = cos(pi (2 - s)) */
-    int64_t a = s < 0 ? -(int64_t)s : (int64_t)s;
-    if (a > PMA_Q30_ONE) a = 2 * (int64_t)PMA_Q30_ONE - a;
+    uint32_t a = s < 0 ? (uint32_t)0 - (uint32_t)s : (uint32_t)s;
+    if (a > (uint32_t)PMA_Q30_ONE) a = 2u * (uint32_t)PMA_Q30_ONE - a;
     int negate = 0;
-    if (a > PMA_Q30_ONE / 2) {                 /* cos(pi s) = -cos(pi (1 - s)) */
-        a = PMA_Q30_ONE - a;
+    if (a > (uint32_t)PMA_Q30_ONE / 2u) {       /* cos(pi s) = -cos(pi (1 - s)) */
+        a = (uint32_t)PMA_Q30_ONE - a;
         negate = 1;
     }
-    const int64_t x = pma_rshift_round(a * a, 30);                 /* Q30, <= 0.25 */
-    int64_t p = COS_C4;
-    p = COS_C3 + pma_rshift_round(p * x, 30);
-    p = COS_C2 + pma_rshift_round(p * x, 30);
-    p = COS_C1 + pma_rshift_round(p * x, 30);                       /* Q28 */
-    int64_t c = PMA_Q30_ONE + pma_rshift_round(p * x, 28);          /* Q30 */
-    if (c > PMA_Q30_ONE) c = PMA_Q30_ONE;
+    const uint32_t x = umul_shift(a, a, 30);                    /* Q30, <= 1/4 */
+    uint32_t h = COS_C3 - umul_shift(COS_C4, x, 30);
+    h = COS_C2 - umul_shift(h, x, 30);
+    h = COS_C1 - umul_shift(h, x, 30);                          /* Q28, in [3.9, 4.94] */
+    const uint32_t d = umul_shift(h, x, 28);                    /* 1 - cos, Q30, <= 1 */
+    const int32_t c = d >= (uint32_t)PMA_Q30_ONE ? 0 : (int32_t)((uint32_t)PMA_Q30_ONE - d);
     return (pma_q30_t)(negate ? -c : c);
 }
 

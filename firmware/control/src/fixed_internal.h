@@ -5,15 +5,6 @@
 #include <stdint.h>
 #include "pma/fixed.h"
 
-/* Round-to-nearest (ties away from zero) right shift of a signed 64-bit
- * value with |p| < 2^63; defined behaviour for negative values. */
-static inline int64_t pma_rshift_round(int64_t p, unsigned shift)
-{
-    const uint64_t half = (uint64_t)1 << (shift - 1u);
-    if (p >= 0) return (int64_t)(((uint64_t)p + half) >> shift);
-    return -(int64_t)(((uint64_t)(-p) + half) >> shift);
-}
-
 /* Float configuration value to a Q format with `frac` fractional bits,
  * rounded, saturated to int32 (init-time only; single precision so that no
  * soft-double code is linked on the targets). */

@@ -1,12 +1,12 @@
 /* The paper's controller, float variant (eq. 15-22; see pma/ppc.h). */
 #include "pma/ppc.h"
 #include "pma/status.h"
+#include "pma/trig.h"
 
 #include <stddef.h>
 
 #include <math.h>
 
-#define PI_F 3.14159265358979f
 #define HALF_PI_F 1.57079632679490f
 
 int pma_ppc_init_f32(pma_ppc_f32_t *s, const pma_ppc_config_t *cfg)
@@ -20,7 +20,7 @@ int pma_ppc_init_f32(pma_ppc_f32_t *s, const pma_ppc_config_t *cfg)
     s->inv_w2 = 1.0f / cfg->w2_cm_s;
     s->r_max = 1.0f - cfg->barrier_margin;
     s->soft_r = cfg->soft_barrier_r;
-    s->soft_tan = (cfg->soft_barrier_r < 1.0f) ? tanf(HALF_PI_F * cfg->soft_barrier_r) : 0.0f;
+    s->soft_tan = (cfg->soft_barrier_r < 1.0f) ? pma_tan_halfpi_f32(cfg->soft_barrier_r) : 0.0f;
     s->soft_sec2 = 1.0f + s->soft_tan * s->soft_tan;
     pma_ppc_reset_f32(s);
     s->ready = 1;
@@ -53,7 +53,7 @@ static float transform(const pma_ppc_f32_t *s, float r, float *sec2, uint32_t *f
         *sec2 = s->soft_sec2;
         t = s->soft_tan + HALF_PI_F * s->soft_sec2 * (ar - s->soft_r);
     } else {
-        t = tanf(HALF_PI_F * ar);
+        t = pma_tan_halfpi_f32(ar);
         *sec2 = 1.0f + t * t;
     }
     return r < 0.0f ? -t : t;
@@ -70,7 +70,7 @@ int pma_ppc_step_f32(pma_ppc_f32_t *s, float t_s, float x_cm, float v_cm_s, floa
     if (t_s < 0.0f) return PMA_ERR_RANGE;
 
     pma_ppc_out_f32_t o = {0};
-    o.alpha = (t_s < s->cfg.t_u_s) ? 0.5f - 0.5f * cosf(PI_F * t_s / s->cfg.t_u_s) : 1.0f; /* 15 */
+    o.alpha = (t_s < s->cfg.t_u_s) ? 0.5f - 0.5f * pma_cos_pi_f32(t_s / s->cfg.t_u_s) : 1.0f; /* 15 */
     o.e_cm = x_cm - xr_cm;                                                    /* 8 */
     o.lambda1_cm = o.alpha * o.e_cm;                                          /* 16 */
     if (!isfinite(o.lambda1_cm)) return PMA_ERR_NOT_FINITE;   /* inputs too far apart */

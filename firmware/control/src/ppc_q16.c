@@ -70,13 +70,13 @@ void pma_ppc_reset_q16(pma_ppc_q16_t *s)
  * 1/w in Q8.24; clamped to +-r_max (flagging the barrier). |lambda| is
  * limited to 128 first (then |r| > 1 anyway, since w <= 100), which keeps
  * the product below 2^63. */
-#define LAMBDA_Q24_LIMIT ((int64_t)1 << 31)
+#define LAMBDA_Q24_LIMIT ((int64_t)INT32_MAX)
 static pma_q30_t normalise(const pma_ppc_q16_t *s, int64_t lambda_q24, int32_t inv_w_q24,
                            uint32_t *flags, uint32_t barrier_flag)
 {
     if (lambda_q24 > LAMBDA_Q24_LIMIT) lambda_q24 = LAMBDA_Q24_LIMIT;
     if (lambda_q24 < -LAMBDA_Q24_LIMIT) lambda_q24 = -LAMBDA_Q24_LIMIT;
-    const int64_t r = pma_rshift_round(lambda_q24 * inv_w_q24, 18);
+    const int64_t r = pma_rshift_round(pma_mul32((int32_t)lambda_q24, inv_w_q24), 18);
     if (r >= s->r_max) {
         *flags |= barrier_flag;
         return s->r_max;
@@ -110,7 +110,7 @@ static pma_q30_t tuning_alpha(const pma_ppc_q16_t *s, pma_q16_t t)
 {
     if (t <= 0) return 0;                      /* exact bumpless start */
     if (t >= s->t_u) return PMA_Q30_ONE;
-    int64_t x = pma_rshift_round((int64_t)t * s->inv_t_u_q24, 10);   /* t/t_u, Q30 */
+    int64_t x = pma_rshift_round(pma_mul32(t, s->inv_t_u_q24), 10);   /* t/t_u, Q30 */
     if (x > PMA_Q30_ONE) x = PMA_Q30_ONE;
     return (PMA_Q30_ONE - pma_q30_cos_pi((pma_q30_t)x)) / 2;          /* 15 */
 }
@@ -122,48 +122,48 @@ int pma_ppc_step_q16(pma_ppc_q16_t *s, pma_q16_t t_s, pma_q16_t x_cm, pma_q16_t 
     if (!s->ready) return PMA_ERR_NOT_READY;
     if (t_s < 0) return PMA_ERR_RANGE;
 
-    pma_ppc_out_q16_t o = {0};
+    pma_ppc_out_q16_t *const o = &s->out;   /* telemetry written in place: no copy */
+    o->flags = 0;
     pma_q16_t sec2;
-    o.alpha = tuning_alpha(s, t_s);
-    o.e_cm = pma_q16_ssub(x_cm, xr_cm);                                        /* 8 */
-    const int64_t lambda1_q24 = pma_rshift_round((int64_t)o.e_cm * o.alpha, 22);   /* 16 */
-    o.lambda1_cm = pma_q16_sat64(pma_rshift_round(lambda1_q24, 8));
-    const pma_q30_t r1 = normalise(s, lambda1_q24, s->inv_w1_q24, &o.flags,
+    o->alpha = tuning_alpha(s, t_s);
+    o->e_cm = pma_q16_ssub(x_cm, xr_cm);                                        /* 8 */
+    const int64_t lambda1_q24 = pma_rshift_round(pma_mul32(o->e_cm, o->alpha), 22);   /* 16 */
+    o->lambda1_cm = pma_q16_sat64(pma_rshift_round(lambda1_q24, 8));
+    const pma_q30_t r1 = normalise(s, lambda1_q24, s->inv_w1_q24, &o->flags,
                                    PMA_PPC_FLAG_BARRIER1);
-    o.chi = transform(s, r1, &sec2, &o.flags, PMA_PPC_FLAG_SOFT1);              /* 18 */
-    const int64_t theta_q24 = -pma_rshift_round((int64_t)s->a * o.chi, 8);      /* 17 */
-    o.theta_cm_s = pma_q16_sat64(pma_rshift_round(theta_q24, 8));
+    o->chi = transform(s, r1, &sec2, &o->flags, PMA_PPC_FLAG_SOFT1);              /* 18 */
+    const int64_t theta_q24 = -pma_rshift_round(pma_mul32(s->a, o->chi), 8);      /* 17 */
+    o->theta_cm_s = pma_q16_sat64(pma_rshift_round(theta_q24, 8));
     const int64_t lambda2_q24 =
-        pma_rshift_round((int64_t)v_cm_s * o.alpha, 22) - theta_q24;            /* 19 */
-    o.lambda2_cm_s = pma_q16_sat64(pma_rshift_round(lambda2_q24, 8));
-    const pma_q30_t r2 = normalise(s, lambda2_q24, s->inv_w2_q24, &o.flags,
+        pma_rshift_round(pma_mul32(v_cm_s, o->alpha), 22) - theta_q24;            /* 19 */
+    o->lambda2_cm_s = pma_q16_sat64(pma_rshift_round(lambda2_q24, 8));
+    const pma_q30_t r2 = normalise(s, lambda2_q24, s->inv_w2_q24, &o->flags,
                                    PMA_PPC_FLAG_BARRIER2);
-    o.delta = transform(s, r2, &sec2, &o.flags, PMA_PPC_FLAG_SOFT2);            /* 22 */
-    o.beta_s_cm = pma_q16_sat64(pma_rshift_round((int64_t)sec2 * s->inv_w2_q24, 24)); /* 21 */
-    o.u_law = pma_q16_sneg(pma_q16_smul(pma_q16_smul(s->c, o.beta_s_cm), o.delta)); /* 20 */
+    o->delta = transform(s, r2, &sec2, &o->flags, PMA_PPC_FLAG_SOFT2);            /* 22 */
+    o->beta_s_cm = pma_q16_sat64(pma_rshift_round(pma_mul32(sec2, s->inv_w2_q24), 24)); /* 21 */
+    o->u_law = pma_q16_sneg(pma_q16_smul(pma_q16_smul(s->c, o->beta_s_cm), o->delta)); /* 20 */
 
-    o.u_ff = pma_q16_sat64(pma_rshift_round(s->u_ff_q32, 16));
-    const pma_q16_t v = pma_q16_sadd(o.u_ff, o.u_law);
+    o->u_ff = pma_q16_sat64(pma_rshift_round(s->u_ff_q32, 16));
+    const pma_q16_t v = pma_q16_sadd(o->u_ff, o->u_law);
     if (v > s->u_max) {
-        o.flags |= PMA_PPC_FLAG_SAT_HIGH;
-        o.u = s->u_max;
+        o->flags |= PMA_PPC_FLAG_SAT_HIGH;
+        o->u = s->u_max;
     } else if (v < s->u_min) {
-        o.flags |= PMA_PPC_FLAG_SAT_LOW;
-        o.u = s->u_min;
+        o->flags |= PMA_PPC_FLAG_SAT_LOW;
+        o->u = s->u_min;
     } else {
-        o.u = v;
+        o->u = v;
     }
 
     if (s->ff_k > 0 &&
-        !((o.flags & PMA_PPC_FLAG_SAT_HIGH) && o.u_law > 0) &&
-        !((o.flags & PMA_PPC_FLAG_SAT_LOW) && o.u_law < 0)) {
-        int64_t ff = s->u_ff_q32 + pma_rshift_round((int64_t)o.u_law * s->ff_k, 14); /* Q32 */
+        !((o->flags & PMA_PPC_FLAG_SAT_HIGH) && o->u_law > 0) &&
+        !((o->flags & PMA_PPC_FLAG_SAT_LOW) && o->u_law < 0)) {
+        int64_t ff = s->u_ff_q32 + pma_rshift_round(pma_mul32(o->u_law, s->ff_k), 14); /* Q32 */
         const int64_t lo = (int64_t)s->u_min * 65536, hi = (int64_t)s->u_max * 65536;
         s->u_ff_q32 = ff < lo ? lo : (ff > hi ? hi : ff);
     }
-    if (o.flags & PMA_PPC_FLAG_BARRIER1) s->breaches1++;
-    if (o.flags & PMA_PPC_FLAG_BARRIER2) s->breaches2++;
-    s->out = o;
-    *u = o.u;
+    if (o->flags & PMA_PPC_FLAG_BARRIER1) s->breaches1++;
+    if (o->flags & PMA_PPC_FLAG_BARRIER2) s->breaches2++;
+    *u = o->u;
     return PMA_OK;
 }

@@ -28,17 +28,116 @@ typedef int32_t pma_q30_t;
 #define PMA_Q16_C(x) ((pma_q16_t)((x) >= 0 ? (x) * 65536.0 + 0.5 : (x) * 65536.0 - 0.5))
 #define PMA_Q30_C(x) ((pma_q30_t)((x) >= 0 ? (x) * 1073741824.0 + 0.5 : (x) * 1073741824.0 - 0.5))
 
-pma_q16_t pma_q16_sadd(pma_q16_t a, pma_q16_t b);
-pma_q16_t pma_q16_ssub(pma_q16_t a, pma_q16_t b);
-pma_q16_t pma_q16_sneg(pma_q16_t a);
-pma_q16_t pma_q16_smul(pma_q16_t a, pma_q16_t b);
-pma_q16_t pma_q16_sdiv(pma_q16_t a, pma_q16_t b);
-/* a (Q16.16) times b (Q2.30) -> Q16.16, saturating. */
-pma_q16_t pma_q16_smul_q30(pma_q16_t a, pma_q30_t b);
+/* ---- building blocks (inline: they are the inner loop of every *_q16 step) ---- */
+
+/* Exact signed 32 x 32 -> 64-bit product. ARMv7-M compiles the plain form
+ * to one SMULL; ARMv6-M (Cortex-M0) has only a 32-bit MULS, and gcc would
+ * call the generic 64 x 64 __aeabi_lmul, so there the product is built from
+ * four 16 x 16 partial products (no intermediate exceeds 2^32). */
+static inline int64_t pma_mul32(int32_t a, int32_t b)
+{
+#if defined(__ARM_ARCH_6M__)
+    const int neg = (a < 0) != (b < 0);
+    const uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a;
+    const uint32_t ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
+    const uint32_t al = ua & 0xFFFFu, ah = ua >> 16, bl = ub & 0xFFFFu, bh = ub >> 16;
+    const uint32_t lo = al * bl;
+    const uint32_t m1 = ah * bl + (lo >> 16);
+    const uint32_t m2 = al * bh + (m1 & 0xFFFFu);
+    const uint32_t hi = ah * bh + (m1 >> 16) + (m2 >> 16);
+    const uint64_t p = ((uint64_t)hi << 32) | (uint64_t)((m2 << 16) | (lo & 0xFFFFu));
+    return neg ? -(int64_t)p : (int64_t)p;
+#else
+    return (int64_t)a * b;
+#endif
+}
+
+/* Round-to-nearest (ties away from zero) right shift of a signed 64-bit
+ * value with |p| < 2^63, 1 <= shift <= 62; defined for negative values. */
+static inline int64_t pma_rshift_round(int64_t p, unsigned shift)
+{
+    const uint64_t half = (uint64_t)1 << (shift - 1u);
+    if (p >= 0) return (int64_t)(((uint64_t)p + half) >> shift);
+    return -(int64_t)(((uint64_t)(-p) + half) >> shift);
+}
+
+/* Saturate a 64-bit intermediate to int32. */
+static inline pma_q16_t pma_q16_sat64(int64_t a)
+{
+    if (a > INT32_MAX) return PMA_Q16_MAX;
+    if (a < INT32_MIN) return PMA_Q16_MIN;
+    return (pma_q16_t)a;
+}
+
+/* a + b, saturating; overflow is detected in unsigned math (the operands
+ * share a sign and the sum does not). */
+static inline pma_q16_t pma_q16_sadd(pma_q16_t a, pma_q16_t b)
+{
+    const uint32_t ua = (uint32_t)a, ub = (uint32_t)b, sum = ua + ub;
+    if (!((ua ^ ub) & 0x80000000u) && ((ua ^ sum) & 0x80000000u)) {
+        return (ua & 0x80000000u) ? PMA_Q16_MIN : PMA_Q16_MAX;
+    }
+    return (pma_q16_t)sum;
+}
+
+/* a - b, saturating (overflow iff the operands differ in sign and the
+ * result's sign differs from a's). */
+static inline pma_q16_t pma_q16_ssub(pma_q16_t a, pma_q16_t b)
+{
+    const uint32_t ua = (uint32_t)a, ub = (uint32_t)b, diff = ua - ub;
+    if (((ua ^ ub) & 0x80000000u) && ((ua ^ diff) & 0x80000000u)) {
+        return (ua & 0x80000000u) ? PMA_Q16_MIN : PMA_Q16_MAX;
+    }
+    return (pma_q16_t)diff;
+}
+
+static inline pma_q16_t pma_q16_sneg(pma_q16_t a)
+{
+    return a == PMA_Q16_MIN ? PMA_Q16_MAX : -a;
+}
+
+/* a b (both Q16.16) -> Q16.16, rounded, saturating. On ARMv6-M the rounded
+ * magnitude (|a| |b| + 2^15) >> 16 is assembled from 16 x 16 partial products
+ * with overflow checks, skipping the 64-bit intermediate; same results. */
+static inline pma_q16_t pma_q16_smul(pma_q16_t a, pma_q16_t b)
+{
+#if defined(__ARM_ARCH_6M__)
+    const int neg = (a < 0) != (b < 0);
+    const uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a;
+    const uint32_t ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
+    const uint32_t al = ua & 0xFFFFu, ah = ua >> 16, bl = ub & 0xFFFFu, bh = ub >> 16;
+    const uint32_t limit = neg ? 0x80000000u : 0x7FFFFFFFu;
+    const uint32_t hi = ah * bh, m1 = ah * bl, m2 = al * bh;
+    if (hi >= 0x8000u || m1 >= 0x80000000u || m2 >= 0x80000000u) {
+        return neg ? PMA_Q16_MIN : PMA_Q16_MAX;
+    }
+    /* each term < 2^31: the partial sums below never wrap before the checks */
+    uint32_t m = (hi << 16) + m1;
+    if (m > limit) return neg ? PMA_Q16_MIN : PMA_Q16_MAX;
+    m += m2;
+    if (m > limit) return neg ? PMA_Q16_MIN : PMA_Q16_MAX;
+    m += (al * bl + 0x8000u) >> 16;
+    if (m > limit) return neg ? PMA_Q16_MIN : PMA_Q16_MAX;
+    return neg ? (pma_q16_t)(0u - m) : (pma_q16_t)m;
+#else
+    return pma_q16_sat64(pma_rshift_round(pma_mul32(a, b), 16));
+#endif
+}
+
+/* a (Q16.16) times b (Q2.30) -> Q16.16, rounded, saturating. */
+static inline pma_q16_t pma_q16_smul_q30(pma_q16_t a, pma_q30_t b)
+{
+    return pma_q16_sat64(pma_rshift_round(pma_mul32(a, b), 30));
+}
+
 /* Clamp a to [lo, hi] (requires lo <= hi). */
-pma_q16_t pma_q16_clamp(pma_q16_t a, pma_q16_t lo, pma_q16_t hi);
-/* Saturate a 64-bit Q16.16 intermediate to int32. */
-pma_q16_t pma_q16_sat64(int64_t a);
+static inline pma_q16_t pma_q16_clamp(pma_q16_t a, pma_q16_t lo, pma_q16_t hi)
+{
+    return a < lo ? lo : (a > hi ? hi : a);
+}
+
+/* a / b, rounded, saturating; b = 0 gives the limit with a's sign (0/0 = 0). */
+pma_q16_t pma_q16_sdiv(pma_q16_t a, pma_q16_t b);
 
 /* Conversions for configuration and tests (not for the control tick).
  * from_f32 saturates; NaN converts to 0. */
