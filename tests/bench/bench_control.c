@@ -194,25 +194,25 @@ static void bench_velest_ref(uint32_t e_f, uint32_t e_q)
     }
     report("ref_q16(case3)", per_step(pma_board_timer_elapsed_ns(), e_q));
     sink_f = v + x + d;
-    sink_q = vq + xq + dq;
+    sink_q = (pma_q16_t)(((uint32_t)vq + (uint32_t)xq + (uint32_t)dq) & 0x7FFFFFFFu);
 }
 
 static void bench_fixed(uint32_t e_q)
 {
-    pma_q16_t acc = 0;
+    uint32_t acc = 0;   /* checksum keeps the calls alive; unsigned: wraps by definition */
     pma_board_timer_start();
-    for (uint32_t k = 0; k < N; ++k) acc += pma_q16_tan_halfpi(qv[k % TABLE] * 16384);
+    for (uint32_t k = 0; k < N; ++k) acc += (uint32_t)pma_q16_tan_halfpi(qv[k % TABLE] * 16384);
     report("q16_tan_halfpi", per_step(pma_board_timer_elapsed_ns(), e_q));
     pma_board_timer_start();
-    for (uint32_t k = 0; k < N; ++k) acc += pma_q30_cos_pi(qv[k % TABLE] * 16384);
+    for (uint32_t k = 0; k < N; ++k) acc += (uint32_t)pma_q30_cos_pi(qv[k % TABLE] * 16384);
     report("q30_cos_pi", per_step(pma_board_timer_elapsed_ns(), e_q));
     pma_board_timer_start();
-    for (uint32_t k = 0; k < N; ++k) acc += pma_q16_smul(qx[k % TABLE], qv[k % TABLE]);
+    for (uint32_t k = 0; k < N; ++k) acc += (uint32_t)pma_q16_smul(qx[k % TABLE], qv[k % TABLE]);
     report("q16_smul", per_step(pma_board_timer_elapsed_ns(), e_q));
     pma_board_timer_start();
-    for (uint32_t k = 0; k < N; ++k) acc += pma_q16_sdiv(qv[k % TABLE], qx[k % TABLE]);
+    for (uint32_t k = 0; k < N; ++k) acc += (uint32_t)pma_q16_sdiv(qv[k % TABLE], qx[k % TABLE]);
     report("q16_sdiv", per_step(pma_board_timer_elapsed_ns(), e_q));
-    sink_q = acc;
+    sink_q = (pma_q16_t)(acc & 0x7FFFFFFFu);
 }
 
 int main(void)

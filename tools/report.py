@@ -1,0 +1,162 @@
+#!/usr/bin/env python3
+"""Golden-vector and cost report of the control library.
+
+Runs, for every preset that has been built (tools/build-all.sh):
+  - the golden-vector tests (CTest, label-free: tests named test_golden_*),
+    collecting their `GOLDEN ...` summary lines;
+  - the benchmarks (`cmake --build --preset P --target bench`; under QEMU with
+    -icount shift=0, so Cortex-M figures are exact instruction counts),
+    collecting their `BENCH ...` lines;
+  - the code size of each control-library object (arm-none-eabi-size).
+and prints them as tables, with the issue's cost targets next to the figures.
+Figures are printed, never asserted.
+
+Usage: python tools/report.py [--presets host,cortex-m4f,...] [--markdown FILE]
+"""
+from __future__ import annotations
+
+import argparse
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+PRESETS = ["host", "cortex-m4f", "cortex-m3", "cortex-m0"]
+ARM = ["cortex-m4f", "cortex-m3", "cortex-m0"]
+
+# (benchmark name, preset, max instructions per step) from the issue
+TARGETS = [
+    ("ppc_f32(t>=t_u)", "cortex-m4f", 400),
+    ("ppc_f32(t<t_u)", "cortex-m4f", 400),
+    ("ppc_q16(t>=t_u)", "cortex-m0", 1500),
+    ("ppc_q16(t<t_u)", "cortex-m0", 1500),
+    ("mfac_f32", "cortex-m4f", 150),
+]
+
+# Control-library objects grouped by module (shared objects listed separately).
+MODULES = {
+    "ppc_f32": ["ppc_f32", "trig_f32"],
+    "ppc_q16": ["ppc_q16"],
+    "ppc config (shared)": ["ppc_config"],
+    "mfac_f32 + config": ["mfac"],
+    "mfac_q16": ["mfac_q16"],
+    "pid_f32 + config": ["pid"],
+    "pid_q16": ["pid_q16"],
+    "velest_f32 + config": ["velest"],
+    "velest_q16": ["velest_q16"],
+    "ref_f32 + config + band": ["ref"],
+    "ref_q16": ["ref_q16"],
+    "fixed-point math (shared)": ["fixed"],
+    "status names": ["status"],
+}
+
+
+def run(cmd: list[str]) -> str:
+    proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
+    if proc.returncode != 0:
+        sys.stderr.write(proc.stdout[-3000:] + proc.stderr[-3000:])
+        raise SystemExit(f"report: command failed ({proc.returncode}): {' '.join(cmd)}")
+    return proc.stdout + proc.stderr
+
+
+def built(preset: str) -> bool:
+    return (ROOT / "build" / preset / "build.ninja").exists()
+
+
+def golden_lines(preset: str) -> list[str]:
+    out = run(["ctest", "--preset", preset, "-R", "^test_golden_", "-V"])
+    return [m.group(0) for m in re.finditer(r"GOLDEN [^\r\n]*", out)]
+
+
+def bench_lines(preset: str) -> dict[str, float]:
+    out = run(["cmake", "--build", "--preset", preset, "--target", "bench"])
+    figures: dict[str, float] = {}
+    for m in re.finditer(r"^BENCH (\S+) (\S+) ([0-9.]+) (\S+)/step", out, re.M):
+        figures[m.group(2)] = float(m.group(3))
+    return figures
+
+
+def code_sizes(preset: str) -> dict[str, int]:
+    objdir = ROOT / "build" / preset / "firmware/control/CMakeFiles/pma_control.dir/src"
+    objs = sorted(objdir.glob("*.obj")) or sorted(objdir.glob("*.o"))
+    if not objs:
+        return {}
+    out = run(["arm-none-eabi-size", *map(str, objs)])
+    sizes: dict[str, int] = {}
+    for line in out.splitlines()[1:]:
+        parts = line.split()
+        if len(parts) >= 6:
+            text, data = int(parts[0]), int(parts[1])
+            sizes[Path(parts[5]).name.split(".")[0]] = text + data
+    return sizes
+
+
+def table(header: list[str], rows: list[list[str]]) -> str:
+    widths = [max(len(r[i]) for r in [header, *rows]) for i in range(len(header))]
+    fmt = lambda r: "| " + " | ".join(c.ljust(w) for c, w in zip(r, widths)) + " |"
+    sep = "|" + "|".join("-" * (w + 2) for w in widths) + "|"
+    return "\n".join([fmt(header), sep, *map(fmt, rows)])
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--presets", default=",".join(PRESETS),
+                    help="comma-separated presets (default: all four)")
+    ap.add_argument("--markdown", type=Path, help="also write the report to this file")
+    args = ap.parse_args()
+    presets = [p for p in args.presets.split(",") if p]
+    unknown = [p for p in presets if p not in PRESETS]
+    if unknown:
+        ap.error(f"unknown preset(s): {', '.join(unknown)} (choose from {', '.join(PRESETS)})")
+    missing = [p for p in presets if not built(p)]
+    if missing:
+        ap.error(f"not built: {', '.join(missing)} (run tools/build-all.sh first)")
+
+    parts: list[str] = []
+    say = parts.append
+
+    say("## Golden vectors (numpy double reference vs C, per preset)\n")
+    golden = {p: golden_lines(p) for p in presets}
+    ref = golden[presets[0]]
+    for p in presets[1:]:
+        same = golden[p] == ref
+        say(f"- {p}: {len(golden[p])} summary lines, "
+            f"{'identical to' if same else 'DIFFERENT from'} {presets[0]}")
+    say("")
+    say("```")
+    say("\n".join(ref) if ref else "(no GOLDEN lines: golden tests not built)")
+    say("```\n")
+
+    say("## Cost per control step (Cortex-M: instructions, QEMU -icount shift=0; host: ns)\n")
+    bench = {p: bench_lines(p) for p in presets}
+    names = list(dict.fromkeys(n for p in presets for n in bench[p]))
+    cell = lambda v: "-" if v is None or v < 0 else f"{v:.0f}"   # < 0: below timer resolution
+    say(table(["step", *presets], [[n, *(cell(bench[p].get(n)) for p in presets)] for n in names]))
+    say("")
+    say("Targets (issue 2):\n")
+    rows = []
+    for name, preset, limit in TARGETS:
+        got = bench.get(preset, {}).get(name)
+        verdict = "n/a" if got is None else ("met" if got <= limit else "MISSED")
+        rows.append([name, preset, str(limit), "-" if got is None else f"{got:.0f}", verdict])
+    say(table(["step", "core", "target", "measured", ""], rows))
+    say("")
+
+    arm = [p for p in presets if p in ARM]
+    if arm:
+        say("## Code size of each module (.text + .data of its objects, bytes)\n")
+        sizes = {p: code_sizes(p) for p in arm}
+        rows = [[m, *(str(sum(sizes[p].get(o, 0) for o in objs)) for p in arm)]
+                for m, objs in MODULES.items()]
+        say(table(["module", *arm], rows))
+        say("")
+    text = "\n".join(parts)
+    print(text)
+    if args.markdown:
+        args.markdown.write_text(text + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,54 @@
+#!/usr/bin/env bash
+# One-time (idempotent) set-up of a Debian 12 / Ubuntu machine for building and
+# testing the PMA firmware: Debian packages, the cmocka source for the ARM
+# builds (.deps/), and a Python virtual environment (.venv/) with the packages
+# of tools/requirements.txt. Run as root (or with sudo available).
+# Called by tools/run-demo.sh and tools/run-tests.sh; safe to run again.
+set -euo pipefail
+
+ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+say() { printf 'setup: %s\n' "$*"; }
+
+PACKAGES=(
+  cmake ninja-build gcc make pkg-config dpkg-dev     # host build
+  libcmocka-dev                                      # C unit tests (host)
+  gcc-arm-none-eabi libnewlib-arm-none-eabi          # Cortex-M builds
+  qemu-system-arm                                    # Cortex-M tests and benchmarks
+  python3 python3-venv python3-pip                   # golden reference, reports
+  user-mode-linux kmod iproute2 can-utils            # hil/with-vcan (vcan where the kernel has none)
+)
+
+SUDO=""
+if [[ $(id -u) -ne 0 ]]; then
+  command -v sudo >/dev/null || { echo "setup: run as root or install sudo" >&2; exit 1; }
+  SUDO="sudo"
+fi
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  say "installing Debian packages: ${missing[*]}"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+else
+  say "Debian packages present"
+fi
+
+bash "$ROOT/tools/fetch-deps.sh"
+
+VENV=${PMA_VENV:-$ROOT/.venv}
+if [[ ! -x $VENV/bin/python ]]; then
+  say "creating Python virtual environment $VENV"
+  python3 -m venv "$VENV"
+fi
+if ! "$VENV/bin/python" -c "import numpy, pytest, matplotlib" 2>/dev/null ||
+   [[ $ROOT/tools/requirements.txt -nt $VENV/.pma-requirements-stamp ]]; then
+  say "installing Python packages (tools/requirements.txt)"
+  "$VENV/bin/pip" install -q --upgrade pip
+  "$VENV/bin/pip" install -q -r "$ROOT/tools/requirements.txt"
+  touch "$VENV/.pma-requirements-stamp"
+else
+  say "Python packages present"
+fi
