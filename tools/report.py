@@ -69,12 +69,14 @@ def golden_lines(preset: str) -> list[str]:
     return [m.group(0) for m in re.finditer(r"GOLDEN [^\r\n]*", out)]
 
 
-def bench_lines(preset: str) -> dict[str, float]:
+def bench_lines(preset: str) -> tuple[dict[str, float], list[str]]:
+    """Cost per step by benchmark name, and the ACCURACY lines."""
     out = run(["cmake", "--build", "--preset", preset, "--target", "bench"])
     figures: dict[str, float] = {}
-    for m in re.finditer(r"^BENCH (\S+) (\S+) ([0-9.]+) (\S+)/step", out, re.M):
+    for m in re.finditer(r"^BENCH (\S+) (\S+) (-?[0-9.]+) (\S+)/step", out, re.M):
         figures[m.group(2)] = float(m.group(3))
-    return figures
+    accuracy = [m.group(1) for m in re.finditer(r"^ACCURACY \S+ (.*)$", out, re.M)]
+    return figures, accuracy
 
 
 def code_sizes(preset: str) -> dict[str, int]:
@@ -129,7 +131,8 @@ def main() -> int:
     say("```\n")
 
     say("## Cost per control step (Cortex-M: instructions, QEMU -icount shift=0; host: ns)\n")
-    bench = {p: bench_lines(p) for p in presets}
+    results = {p: bench_lines(p) for p in presets}
+    bench = {p: results[p][0] for p in presets}
     names = list(dict.fromkeys(n for p in presets for n in bench[p]))
     cell = lambda v: "-" if v is None or v < 0 else f"{v:.0f}"   # < 0: below timer resolution
     say(table(["step", *presets], [[n, *(cell(bench[p].get(n)) for p in presets)] for n in names]))
@@ -142,6 +145,15 @@ def main() -> int:
         rows.append([name, preset, str(limit), "-" if got is None else f"{got:.0f}", verdict])
     say(table(["step", "core", "target", "measured", ""], rows))
     say("")
+
+    say("## Accuracy against the double reference (u over all golden sets)\n")
+    acc = {p: results[p][1] for p in presets}
+    for p in presets[1:]:
+        say(f"- {p}: {'identical to' if acc[p] == acc[presets[0]] else 'DIFFERENT from'} {presets[0]}")
+    say("")
+    say("```")
+    say("\n".join(acc[presets[0]]))
+    say("```\n")
 
     arm = [p for p in presets if p in ARM]
     if arm:
