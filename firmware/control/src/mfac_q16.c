@@ -1,7 +1,8 @@
 /* CFDL-MFAC, fixed-point variant (see pma/mfac.h). Signals and parameters in
  * Q16.16; the squares and quotients of the update laws use 64-bit
  * intermediates (Q32) so that du^2 and phi^2 never saturate mid-computation;
- * results saturate to Q16.16. eps below 2^-16 acts as one LSB (2^-16). */
+ * the estimator gain eta du / (mu + du^2) is kept in Q8.24; results saturate
+ * to Q16.16. eps below 2^-16 acts as one LSB (2^-16). */
 #include "pma/mfac.h"
 #include "pma/status.h"
 
@@ -9,22 +10,22 @@
 #include "check.h"
 #include "fixed_internal.h"
 
-/* num / den -> Q16.16 (saturated), num and den both with 32 fractional bits,
- * den > 0. */
-static pma_q16_t div_q32(int64_t num, int64_t den)
+/* num / den with `frac` (16 or 24) fractional bits, saturated to int32; num
+ * and den both with 32 fractional bits, den > 0. */
+static int32_t div_q32(int64_t num, int64_t den, unsigned frac)
 {
     const int neg = num < 0;
     const uint64_t un = (uint64_t)(neg ? -num : num);
     const uint64_t ud = (uint64_t)den;
     uint64_t q;
-    if (un < ((uint64_t)1 << 46)) {
-        q = ((un << 16) + ud / 2u) / ud;
+    if (un < ((uint64_t)1 << (62u - frac))) {
+        q = ((un << frac) + ud / 2u) / ud;
     } else {
-        const uint64_t d16 = ud >> 16;
-        q = (d16 == 0u) ? UINT64_MAX : (un + d16 / 2u) / d16;
+        const uint64_t dn = ud >> frac;
+        q = (dn == 0u) ? UINT64_MAX : (un + dn / 2u) / dn;
     }
-    if (q > (uint64_t)INT32_MAX) return neg ? PMA_Q16_MIN : PMA_Q16_MAX;
-    return neg ? -(pma_q16_t)q : (pma_q16_t)q;
+    if (q > (uint64_t)INT32_MAX) return neg ? INT32_MIN : INT32_MAX;
+    return neg ? -(int32_t)q : (int32_t)q;
 }
 
 int pma_mfac_init_q16(pma_mfac_q16_t *s, const pma_mfac_config_t *cfg)
@@ -75,11 +76,14 @@ int pma_mfac_step_q16(pma_mfac_q16_t *s, pma_q16_t y_cm, pma_q16_t yref_next_cm,
     const pma_q16_t du = pma_q16_ssub(s->u1, s->u2);
     const pma_q16_t dy = pma_q16_ssub(y_cm, y1);
     /* phi += eta du / (mu + du^2) (dy - phi du) */
-    const int64_t du2_q32 = (int64_t)du * du;
-    const pma_q16_t k1 = div_q32((int64_t)s->eta * du, (int64_t)s->mu * 65536 + du2_q32);
-    const int64_t innov_q32 = (int64_t)dy * 65536 - (int64_t)s->phi * du;
+    /* k1 = eta du / (mu + du^2) <= eta / (2 sqrt(mu)) < 32 (mu >= 1/1024): Q8.24
+     * keeps it precise, since it multiplies innovations of tens of cm */
+    const int64_t du2_q32 = pma_mul32(du, du);
+    const int32_t k1_q24 = div_q32(pma_mul32(s->eta, du), (int64_t)s->mu * 65536 + du2_q32, 24);
+    const int64_t innov_q32 = (int64_t)dy * 65536 - pma_mul32(s->phi, du);
     const pma_q16_t innov = pma_q16_sat64(pma_rshift_round(innov_q32, 16));
-    pma_q16_t phi = pma_q16_sadd(s->phi, pma_q16_smul(k1, innov));
+    const pma_q16_t dphi = pma_q16_sat64(pma_rshift_round(pma_mul32(k1_q24, innov), 24));
+    pma_q16_t phi = pma_q16_sadd(s->phi, dphi);
     uint32_t flags = 0;
     const pma_q16_t aphi = phi < 0 ? pma_q16_sneg(phi) : phi;
     const pma_q16_t adu = du < 0 ? pma_q16_sneg(du) : du;
@@ -89,8 +93,8 @@ int pma_mfac_step_q16(pma_mfac_q16_t *s, pma_q16_t y_cm, pma_q16_t yref_next_cm,
         flags |= PMA_MFAC_FLAG_RESET;
     }
     /* u = u(k-1) + rho phi / (lambda + phi^2) (y* - y) */
-    const pma_q16_t k2 = div_q32((int64_t)s->rho * phi,
-                                 (int64_t)s->lambda * 65536 + (int64_t)phi * phi);
+    const pma_q16_t k2 = div_q32(pma_mul32(s->rho, phi),
+                                 (int64_t)s->lambda * 65536 + pma_mul32(phi, phi), 16);
     const pma_q16_t v = pma_q16_sadd(s->u1, pma_q16_smul(k2, pma_q16_ssub(yref_next_cm, y_cm)));
     pma_q16_t out = v;
     if (v > s->u_max) {

@@ -41,6 +41,7 @@
  *    saturated in the same direction, clamped to [u_min, u_max]. It supplies
  *    the steady pressure that the law (no integral action) can otherwise only
  *    produce by pushing lambda2 towards its barrier. 0 and 0 = off.
+ *    (Fixed point: ff_gain_per_s * period_s < 1, else PMA_ERR_FIXED_RANGE.)
  * Output: u = clamp(u_ff + u_law, u_min, u_max).
  */
 #ifndef PMA_PPC_H

@@ -1,0 +1,253 @@
+/* Golden-vector test of the paper's controller (pma_ppc_*): every set of
+ * vectors/ppc_vectors.h through the float and the Q16.16 variant, every output field.
+ *
+ * Tolerances. The law amplifies small errors of its arguments near the barrier (tan and
+ * 1/cos^2 diverge), so one fixed relative tolerance would be either far too loose in the
+ * linear regime or fail a correct implementation near the barrier. Each row's tolerance is
+ * therefore a first-order propagation of the variant's primitive errors through the
+ * equations (ppc_tol() below), evaluated at the expected values, times a safety factor,
+ * plus a floor:
+ *
+ *   tol(field) = TOL_SAFETY * propagated(field) + BASE_REL * |expected| + BASE_ABS
+ *
+ * Primitive errors (per variant):
+ *   float: alpha within 2e-6 (cosf of a rounded argument), 1e-6 relative per product /
+ *          quotient (about 8 float ulps: different but legitimate orderings of the same
+ *          formula), tan within 4e-6 relative (libm tanf, or a polynomial as accurate as the
+ *          fixed-point one), a clamped r within 2.4e-7 (1 - margin rounded to float).
+ *          Floor: 1e-5 relative (80 ulps) + 1e-6 absolute.
+ *   Q16:   alpha within 1.5e-5 (pma_q30_cos_pi: abs error < 1e-5, halved, plus argument
+ *          rounding; exactly 1 from t_u on), half an LSB (2^-17) per rounding to Q16.16,
+ *          1e-6 relative for converted constants, tan within 4e-6 relative
+ *          (pma_q16_tan_halfpi: g(r^2) within 1.4e-6), a clamped r within 2^-28.
+ *          Floor: 1e-4 relative + 4 LSB (6.1e-5) absolute, and for u additionally
+ *          U_SPAN_FRAC_Q16 = 0.1 % of (u_max - u_min) (0.8 kPa for [-400, 400]): the
+ *          actuator resolution the Q16 variant must meet.
+ * The feedforward accumulates the u_law error of every row in which it integrates
+ * (ff_gain * period * tol(u_law)).
+ * Values the Q16.16 format cannot hold (beta and u_law beyond the barrier) are expected
+ * saturated at +-32768. Flags are compared exactly (the generator keeps every decision at
+ * least 4 propagated Q16 errors and 1e-4 relative away from its threshold, except the
+ * deliberate exact rows). Rows with t = 0 must give u = u_ff exactly (bumpless start:
+ * alpha = 0 makes lambda1 = lambda2 = 0 whatever the initial error). */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <stdio.h>
+
+#include "pma/status.h"
+#include "golden.h"
+#include "golden_check.h"
+#include "vectors/ppc_vectors.h"
+
+#define HALF_PI 1.57079632679489661923
+
+#define TOL_SAFETY 2.0
+
+/* float variant */
+#define F32_ALPHA_ABS 2e-6
+#define F32_REL 1e-6
+#define F32_TAN_REL 4e-6
+#define F32_R_CLAMPED 2.4e-7
+#define F32_BASE_REL 1e-5
+#define F32_BASE_ABS 1e-6
+
+/* Q16.16 variant */
+#define Q16_ALPHA_ABS 1.5e-5
+#define Q16_HALF_LSB (0.5 / 65536.0)
+#define Q16_REL 1e-6
+#define Q16_TAN_REL 4e-6
+#define Q16_R_CLAMPED (1.0 / 268435456.0)
+#define Q16_BASE_REL 1e-4
+#define Q16_BASE_ABS (4.0 / 65536.0)
+#define U_SPAN_FRAC_Q16 1e-3
+
+typedef struct prim {
+    double alpha_abs, rel, tan_rel, half_lsb, r_clamped, base_rel, base_abs;
+} prim_t;
+
+static const prim_t PRIM_F32 = {F32_ALPHA_ABS, F32_REL, F32_TAN_REL, 0.0, F32_R_CLAMPED,
+                                F32_BASE_REL, F32_BASE_ABS};
+static const prim_t PRIM_Q16 = {Q16_ALPHA_ABS, Q16_REL, Q16_TAN_REL, Q16_HALF_LSB,
+                                Q16_R_CLAMPED, Q16_BASE_REL, Q16_BASE_ABS};
+
+/* Propagated (first-order) errors of one row, before the safety factor and the floor. */
+typedef struct ppc_tol {
+    double alpha, e, l1, chi, theta, l2, delta, beta, u_law, u_ff, u;
+} ppc_tol_t;
+
+static void ppc_tol(const prim_t *p, const pma_ppc_config_t *cfg, const golden_ppc_row_t *r,
+                    double tol_uff, ppc_tol_t *t)
+{
+    const double w1 = cfg->w1_cm, w2 = cfg->w2_cm_s;
+    double soft_sec2 = 0.0;   /* sec^2 at the soft point: the slope factor beyond it */
+    if (cfg->soft_barrier_r < 1.0f) {
+        const double soft_tan = tan(HALF_PI * cfg->soft_barrier_r);
+        soft_sec2 = 1.0 + soft_tan * soft_tan;
+    }
+    const double alpha = r->alpha, e = r->e_cm, l1 = r->lambda1_cm, chi = r->chi;
+    const double theta = r->theta_cm_s, delta = r->delta, beta = r->beta_s_cm;
+    const double v = r->v_cm_s;
+    const double h = p->half_lsb;
+
+    /* from t_u on alpha is exactly 1 (no cos evaluated) */
+    t->alpha = r->t_s >= cfg->t_u_s ? 0.0 : p->alpha_abs;
+    t->e = p->rel * (fabs((double)r->x_cm) + fabs((double)r->xr_cm)) + h;
+    /* a result that is exactly 0 (e = 0, t = 0) carries no rounding */
+    t->l1 = fabs(e) * t->alpha + alpha * t->e + p->rel * fabs(l1) + (l1 != 0.0 ? h : 0.0);
+    double tr1 = (r->flags & PMA_PPC_FLAG_BARRIER1) ? p->r_clamped
+                                                     : t->l1 / w1 + p->rel * fabs(l1 / w1);
+    double sec1 = (r->flags & PMA_PPC_FLAG_SOFT1) ? soft_sec2 : 1.0 + chi * chi;
+    t->chi = p->tan_rel * fabs(chi) + HALF_PI * sec1 * tr1 + (chi != 0.0 ? h : 0.0);
+    t->theta = cfg->a_per_s * t->chi + p->rel * fabs(theta) + (theta != 0.0 ? h : 0.0);
+    t->l2 = fabs(v) * t->alpha + t->theta + p->rel * (fabs(alpha * v) + fabs(theta)) + h;
+    double tr2 = (r->flags & PMA_PPC_FLAG_BARRIER2)
+                     ? p->r_clamped
+                     : t->l2 / w2 + p->rel * fabs((double)r->lambda2_cm_s / w2);
+    int soft2 = (r->flags & PMA_PPC_FLAG_SOFT2) != 0;
+    double sec2 = soft2 ? soft_sec2 : 1.0 + delta * delta;
+    t->delta = p->tan_rel * fabs(delta) + HALF_PI * sec2 * tr2 + h;
+    if (soft2) {
+        t->beta = p->rel * fabs(beta) + h;
+    } else {
+        t->beta = 2.0 * fabs(delta) * t->delta / w2 + (p->rel + 2.0 * p->tan_rel) * fabs(beta) + h;
+    }
+    t->u_law = cfg->c * (fabs(beta) * t->delta + fabs(delta) * t->beta) +
+               p->rel * fabs((double)r->u_law) + 2.0 * h;
+    t->u_ff = tol_uff;
+    if (r->flags & (PMA_PPC_FLAG_SAT_HIGH | PMA_PPC_FLAG_SAT_LOW)) {
+        t->u = h;    /* at a limit: the limit itself */
+    } else {
+        t->u = tol_uff + t->u_law + p->rel * (fabs((double)r->u_ff) + fabs((double)r->u_law)) + h;
+    }
+}
+
+/* Did the feedforward integrate in this row (expected flags and sign of u_law)? */
+static int ff_integrates(const pma_ppc_config_t *cfg, const golden_ppc_row_t *r)
+{
+    if (!(cfg->ff_gain_per_s > 0.0f)) return 0;
+    if ((r->flags & PMA_PPC_FLAG_SAT_HIGH) && r->u_law > 0.0f) return 0;
+    if ((r->flags & PMA_PPC_FLAG_SAT_LOW) && r->u_law < 0.0f) return 0;
+    return 1;
+}
+
+static const char *set_name(uint32_t i) { return GOLDEN_PPC_SETS[i].name; }
+
+static void compare_row(golden_stats_t *st, const prim_t *p, uint32_t k,
+                        const golden_ppc_row_t *r, const ppc_tol_t *t, const double got[12],
+                        double u_extra, int q16)
+{
+    /* expected in field order: alpha e l1 chi theta l2 delta beta u_law u_ff u */
+    static const char *const names[11] = {"alpha", "e_cm", "lambda1_cm", "chi", "theta_cm_s",
+                                          "lambda2_cm_s", "delta", "beta_s_cm", "u_law", "u_ff",
+                                          "u"};
+    const double exp_[11] = {r->alpha, r->e_cm, r->lambda1_cm, r->chi, r->theta_cm_s,
+                             r->lambda2_cm_s, r->delta, r->beta_s_cm, r->u_law, r->u_ff, r->u};
+    const double prop[11] = {t->alpha, t->e, t->l1, t->chi, t->theta, t->l2,
+                             t->delta, t->beta, t->u_law, t->u_ff, t->u};
+    for (int i = 0; i < 11; i++) {
+        double e = q16 ? golden_q16_sat(exp_[i]) : exp_[i];
+        double tol = TOL_SAFETY * prop[i] + p->base_rel * fabs(e) + p->base_abs;
+        if (i == 10) tol += u_extra;
+        golden_check(st, k, names[i], e, got[i], tol, i == 10);
+    }
+    /* bumpless start: exactly u = u_ff at t = 0 */
+    if (r->t_s == 0.0f && got[10] != got[9]) {
+        char buf[96];
+        snprintf(buf, sizeof buf, "t = 0: u %.9g must equal u_ff %.9g exactly", got[10], got[9]);
+        golden_fail_msg(st, k, "u", buf);
+    }
+    /* the value written to *u is the one reported in out.u */
+    if (got[11] != got[10]) golden_fail_msg(st, k, "u", "*u differs from out.u");
+}
+
+static void run_f32(const golden_ppc_set_t *set)
+{
+    golden_stats_t st;
+    golden_stats_init(&st, "ppc", set->name, GOLDEN_F32, set->n);
+    pma_ppc_f32_t s;
+    int rc = pma_ppc_init_f32(&s, &set->cfg);
+    assert_int_equal(rc, PMA_OK);
+    const double ff_k = (double)set->cfg.ff_gain_per_s * set->cfg.period_s;
+    double tol_uff = F32_REL * fabs((double)set->cfg.ff_init);
+    for (uint32_t k = 0; k < set->n; k++) {
+        const golden_ppc_row_t *r = &set->rows[k];
+        float u = NAN;
+        rc = pma_ppc_step_f32(&s, r->t_s, r->x_cm, r->v_cm_s, r->xr_cm, &u);
+        golden_check_status(&st, k, "pma_ppc_step_f32", rc);
+        ppc_tol_t t;
+        ppc_tol(&PRIM_F32, &set->cfg, r, tol_uff, &t);
+        const pma_ppc_out_f32_t *o = &s.out;
+        const double got[12] = {o->alpha, o->e_cm, o->lambda1_cm, o->chi, o->theta_cm_s,
+                                o->lambda2_cm_s, o->delta, o->beta_s_cm, o->u_law, o->u_ff,
+                                o->u, u};
+        compare_row(&st, &PRIM_F32, k, r, &t, got, 0.0, 0);
+        golden_check_flags(&st, k, "flags", r->flags, o->flags);
+        if (ff_integrates(&set->cfg, r)) tol_uff += ff_k * t.u_law + F32_REL * fabs((double)r->u_ff);
+    }
+    golden_finish(&st);
+}
+
+static void run_q16(const golden_ppc_set_t *set)
+{
+    golden_stats_t st;
+    golden_stats_init(&st, "ppc", set->name, GOLDEN_Q16, set->n);
+    pma_ppc_q16_t s;
+    int rc = pma_ppc_init_q16(&s, &set->cfg);
+    const double ff_k = (double)set->cfg.ff_gain_per_s * set->cfg.period_s;
+    if (rc == PMA_ERR_FIXED_RANGE && ff_k >= 1.0) {
+        /* "converted and range-checked at init": a per-step feedforward gain >= 1 may be
+         * refused by the fixed-point variant (the u_ff clamp is unreachable below 1). */
+        print_message("GOLDEN-SKIP ppc %s q16: init refused ff_gain_per_s * period_s = %g "
+                      "(PMA_ERR_FIXED_RANGE)\n", set->name, ff_k);
+        return;
+    }
+    assert_int_equal(rc, PMA_OK);
+    const double u_extra = U_SPAN_FRAC_Q16 * ((double)set->cfg.u_max - set->cfg.u_min);
+    double tol_uff = Q16_HALF_LSB;
+    for (uint32_t k = 0; k < set->n; k++) {
+        const golden_ppc_row_t *r = &set->rows[k];
+        pma_q16_t u = 0x7fffffff;
+        rc = pma_ppc_step_q16(&s, pma_q16_from_f32(r->t_s), pma_q16_from_f32(r->x_cm),
+                              pma_q16_from_f32(r->v_cm_s), pma_q16_from_f32(r->xr_cm), &u);
+        golden_check_status(&st, k, "pma_ppc_step_q16", rc);
+        ppc_tol_t t;
+        ppc_tol(&PRIM_Q16, &set->cfg, r, tol_uff, &t);
+        const pma_ppc_out_q16_t *o = &s.out;
+        const double got[12] = {pma_q30_to_f32(o->alpha), pma_q16_to_f32(o->e_cm),
+                                pma_q16_to_f32(o->lambda1_cm), pma_q16_to_f32(o->chi),
+                                pma_q16_to_f32(o->theta_cm_s), pma_q16_to_f32(o->lambda2_cm_s),
+                                pma_q16_to_f32(o->delta), pma_q16_to_f32(o->beta_s_cm),
+                                pma_q16_to_f32(o->u_law), pma_q16_to_f32(o->u_ff),
+                                pma_q16_to_f32(o->u), pma_q16_to_f32(u)};
+        compare_row(&st, &PRIM_Q16, k, r, &t, got, u_extra, 1);
+        golden_check_flags(&st, k, "flags", r->flags, o->flags);
+        if (ff_integrates(&set->cfg, r)) tol_uff += ff_k * t.u_law + Q16_HALF_LSB;
+    }
+    golden_finish(&st);
+}
+
+static void test_set(void **state)
+{
+    const golden_case_t *c = (const golden_case_t *)*state;
+    const golden_ppc_set_t *set = &GOLDEN_PPC_SETS[c->set];
+    if (c->variant == GOLDEN_F32) {
+        run_f32(set);
+    } else {
+        run_q16(set);
+    }
+}
+
+static struct CMUnitTest tests[2 * GOLDEN_PPC_NSETS];
+static golden_case_t cases[2 * GOLDEN_PPC_NSETS];
+static char names[2 * GOLDEN_PPC_NSETS][GOLDEN_NAME_LEN];
+
+int main(void)
+{
+    size_t n = golden_register(tests, cases, names, GOLDEN_PPC_NSETS, set_name, test_set);
+    return _cmocka_run_group_tests("golden_ppc", tests, n, NULL, NULL);
+}
