@@ -42,17 +42,12 @@ float pma_q30_to_f32(pma_q30_t a)
 }
 
 /* round(a b / 2^shift) for unsigned operands, 1 <= shift <= 31, result
- * < 2^32. ARMv6-M builds the 64-bit product from 16 x 16 partial products;
- * elsewhere one UMULL. */
+ * < 2^32 (one UMULL on ARMv7-M, partial products on ARMv6-M). */
 static inline uint32_t umul_shift(uint32_t a, uint32_t b, unsigned shift)
 {
 #if defined(__ARM_ARCH_6M__)
-    const uint32_t al = a & 0xFFFFu, ah = a >> 16, bl = b & 0xFFFFu, bh = b >> 16;
-    const uint32_t lo = al * bl;
-    const uint32_t m1 = ah * bl + (lo >> 16);
-    const uint32_t m2 = al * bh + (m1 & 0xFFFFu);
-    uint32_t hi = ah * bh + (m1 >> 16) + (m2 >> 16);
-    const uint32_t low = (m2 << 16) | (lo & 0xFFFFu);
+    uint32_t hi;
+    const uint32_t low = pma_umul32_v6m(a, b, &hi);
     const uint32_t low_r = low + ((uint32_t)1 << (shift - 1u));
     hi += low_r < low;                     /* carry of the rounding add */
     return (hi << (32u - shift)) | (low_r >> shift);
@@ -82,9 +77,12 @@ static inline uint32_t umul_shift(uint32_t a, uint32_t b, unsigned shift)
  *    < 2^-18, under a quarter LSB of the result. */
 static uint32_t udiv_q16(uint32_t num, uint32_t den)
 {
-    const uint32_t q = num / den;
-    if (q >= 32768u) return (uint32_t)INT32_MAX;
-    uint32_t r = num - q * den;                /* r < den <= 2^30 */
+    uint32_t q = 0, r = num;
+    if (num >= den) {                          /* |tan| >= 1: skip the division otherwise */
+        q = num / den;
+        if (q >= 32768u) return (uint32_t)INT32_MAX;
+        r = num - q * den;
+    }                                          /* r < den <= 2^30 */
 #if defined(__ARM_ARCH_6M__)
     uint32_t out = q;
     for (int i = 0; i < 8; ++i) {

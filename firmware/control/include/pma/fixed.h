@@ -30,23 +30,34 @@ typedef int32_t pma_q30_t;
 
 /* ---- building blocks (inline: they are the inner loop of every *_q16 step) ---- */
 
-/* Exact signed 32 x 32 -> 64-bit product. ARMv7-M compiles the plain form
- * to one SMULL; ARMv6-M (Cortex-M0) has only a 32-bit MULS, and gcc would
- * call the generic 64 x 64 __aeabi_lmul, so there the product is built from
- * four 16 x 16 partial products (no intermediate exceeds 2^32). */
-static inline int64_t pma_mul32(int32_t a, int32_t b)
-{
 #if defined(__ARM_ARCH_6M__)
-    const int neg = (a < 0) != (b < 0);
-    const uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a;
-    const uint32_t ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
-    const uint32_t al = ua & 0xFFFFu, ah = ua >> 16, bl = ub & 0xFFFFu, bh = ub >> 16;
+/* Unsigned 32 x 32 -> 64-bit product from four 16 x 16 partial products
+ * (ARMv6-M has only a 32-bit MULS; gcc would call the generic 64 x 64
+ * __aeabi_lmul). Returns the low word, stores the high word; the halves are
+ * kept apart because 64-bit shifts and adds are several instructions on
+ * Thumb-1. No intermediate exceeds 2^32. */
+static inline uint32_t pma_umul32_v6m(uint32_t a, uint32_t b, uint32_t *hi)
+{
+    const uint32_t al = a & 0xFFFFu, ah = a >> 16, bl = b & 0xFFFFu, bh = b >> 16;
     const uint32_t lo = al * bl;
     const uint32_t m1 = ah * bl + (lo >> 16);
     const uint32_t m2 = al * bh + (m1 & 0xFFFFu);
-    const uint32_t hi = ah * bh + (m1 >> 16) + (m2 >> 16);
-    const uint64_t p = ((uint64_t)hi << 32) | (uint64_t)((m2 << 16) | (lo & 0xFFFFu));
-    return neg ? -(int64_t)p : (int64_t)p;
+    *hi = ah * bh + (m1 >> 16) + (m2 >> 16);
+    return (m2 << 16) | (lo & 0xFFFFu);
+}
+#endif
+
+/* Exact signed 32 x 32 -> 64-bit product: one SMULL on ARMv7-M, partial
+ * products of the magnitudes on ARMv6-M. */
+static inline int64_t pma_mul32(int32_t a, int32_t b)
+{
+#if defined(__ARM_ARCH_6M__)
+    const uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a;
+    const uint32_t ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
+    uint32_t hi;
+    const uint32_t lo = pma_umul32_v6m(ua, ub, &hi);
+    const int64_t p = (int64_t)(((uint64_t)hi << 32) | lo);   /* <= 2^62 */
+    return ((a < 0) != (b < 0)) ? -p : p;
 #else
     return (int64_t)a * b;
 #endif
