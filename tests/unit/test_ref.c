@@ -105,7 +105,7 @@ static void test_stream(void **state)
 static void test_band(void **state)
 {
     (void)state;
-    const pma_band_t band = {.k_low_cm = -3.0f, .k_high_cm = 0.0f};
+    const pma_band_t band = pma_band_constant(-3.0f, 0.0f);
     pma_ref_config_t c3 = rc(PMA_REF_CASE3);
     float lo, hi;
     assert_int_equal(pma_ref_bounds(&c3, 180.0f, &lo, &hi), PMA_OK);
@@ -123,12 +123,37 @@ static void test_band(void **state)
     step.amplitude_cm = 2.0f;                                                    /* to 0 cm: at the edge */
     assert_int_equal(pma_band_check_ref(&band, &step, 10.0f, 0.1f), PMA_ERR_BAND);
     assert_int_equal(pma_band_check_ref(&band, &step, 0.5f, 0.1f), PMA_OK);      /* before the step */
-    const pma_band_t bad = {.k_low_cm = 0.0f, .k_high_cm = -3.0f};                /* the paper's typo */
-    assert_int_equal(pma_band_check_ref(&bad, &c3, 10.0f, 0.2f), PMA_ERR_RANGE);
-    assert_int_equal(pma_band_contains(&band, -1.0f), 1);
-    assert_int_equal(pma_band_contains(&band, 0.0f), 0);
-    assert_int_equal(pma_band_contains(&band, NAN), 0);
+    const pma_band_t bad = pma_band_constant(0.0f, -3.0f);                       /* the paper's typo */
+    assert_int_equal(pma_band_validate(&bad, 10.0f), PMA_ERR_BAND);
+    assert_int_equal(pma_band_check_ref(&bad, &c3, 10.0f, 0.2f), PMA_ERR_BAND);
+    assert_int_equal(pma_band_contains(&band, 5.0f, -1.0f), 1);
+    assert_int_equal(pma_band_contains(&band, 5.0f, 0.0f), 0);
+    assert_int_equal(pma_band_contains(&band, 5.0f, NAN), 0);
+    assert_int_equal(pma_band_contains(&band, -1.0f, -1.0f), 0);                 /* bad time */
     assert_int_equal(pma_ref_bounds(&c3, -1.0f, &lo, &hi), PMA_ERR_RANGE);
+}
+
+/* A time-varying band: the upper edge ramps down from 0 to -1 cm over 10 s. */
+static void test_time_varying_band(void **state)
+{
+    (void)state;
+    pma_band_t band = pma_band_constant(-3.0f, 0.0f);
+    band.high = (pma_ref_config_t){.kind = PMA_REF_RAMP, .offset_cm = 0.0f, .amplitude_cm = 1.0f,
+                                   .t0_s = 0.0f, .rate_cm_s = -0.1f};
+    assert_int_equal(pma_band_validate(&band, 20.0f), PMA_OK);
+    assert_int_equal(pma_band_contains(&band, 0.0f, -0.5f), 1);
+    assert_int_equal(pma_band_contains(&band, 6.0f, -0.5f), 0);     /* k_high(6) = -0.6 */
+    assert_int_equal(pma_band_contains(&band, 6.0f, -0.7f), 1);
+    pma_ref_config_t hold = {.kind = PMA_REF_HOLD, .offset_cm = -1.5f};
+    assert_int_equal(pma_band_check_ref(&band, &hold, 20.0f, 0.4f), PMA_OK);     /* -1.1 < -1 */
+    assert_int_equal(pma_band_check_ref(&band, &hold, 20.0f, 0.6f), PMA_ERR_BAND);
+    /* edges that may cross, and a STREAM edge, are refused */
+    band.low = (pma_ref_config_t){.kind = PMA_REF_SINE, .offset_cm = -1.5f, .amplitude_cm = 1.0f,
+                                  .freq_hz = 0.1f};
+    assert_int_equal(pma_band_validate(&band, 20.0f), PMA_ERR_BAND);
+    band.low = (pma_ref_config_t){.kind = PMA_REF_STREAM, .offset_cm = -3.0f};
+    assert_int_equal(pma_band_validate(&band, 20.0f), PMA_ERR_UNSUPPORTED);
+    assert_int_equal(pma_band_contains(&band, 1.0f, -2.0f), 0);
 }
 
 static void test_invalid(void **state)
@@ -165,6 +190,7 @@ int main(void)
         cmocka_unit_test(test_values),
         cmocka_unit_test(test_stream),
         cmocka_unit_test(test_band),
+        cmocka_unit_test(test_time_varying_band),
         cmocka_unit_test(test_invalid),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -77,25 +77,45 @@ int pma_ref_bounds(const pma_ref_config_t *cfg, float t_end_s, float *min_cm, fl
     return PMA_OK;
 }
 
-int pma_band_contains(const pma_band_t *band, float x_cm)
+pma_band_t pma_band_constant(float k_low_cm, float k_high_cm)
 {
-    if (band == NULL) return 0;
-    return (x_cm > band->k_low_cm && x_cm < band->k_high_cm) ? 1 : 0;
+    return (pma_band_t){.low = {.kind = PMA_REF_HOLD, .offset_cm = k_low_cm},
+                        .high = {.kind = PMA_REF_HOLD, .offset_cm = k_high_cm}};
+}
+
+int pma_band_validate(const pma_band_t *band, float t_end_s)
+{
+    if (band == NULL) return PMA_ERR_NULL;
+    if (band->low.kind == PMA_REF_STREAM || band->high.kind == PMA_REF_STREAM) {
+        return PMA_ERR_UNSUPPORTED;
+    }
+    float lo_min, lo_max, hi_min, hi_max;
+    PMA_CHECK(pma_ref_bounds(&band->low, t_end_s, &lo_min, &lo_max));
+    PMA_CHECK(pma_ref_bounds(&band->high, t_end_s, &hi_min, &hi_max));
+    return lo_max < hi_min ? PMA_OK : PMA_ERR_BAND;
+}
+
+int pma_band_contains(const pma_band_t *band, float t_s, float x_cm)
+{
+    float lo, hi;
+    if (band == NULL || pma_ref_value_f32(&band->low, t_s, &lo, NULL) != PMA_OK ||
+        pma_ref_value_f32(&band->high, t_s, &hi, NULL) != PMA_OK) {
+        return 0;
+    }
+    return (x_cm > lo && x_cm < hi) ? 1 : 0;
 }
 
 int pma_band_check_ref(const pma_band_t *band, const pma_ref_config_t *cfg, float t_end_s,
                        float margin_cm)
 {
-    if (band == NULL) return PMA_ERR_NULL;
-    PMA_CHECK(pma_check_finite(band->k_low_cm));
-    PMA_CHECK(pma_check_finite(band->k_high_cm));
+    PMA_CHECK(pma_band_validate(band, t_end_s));
     PMA_CHECK(pma_check_finite(margin_cm));
-    if (!(band->k_low_cm < band->k_high_cm) || margin_cm < 0.0f) return PMA_ERR_RANGE;
-    float lo, hi;
-    PMA_CHECK(pma_ref_bounds(cfg, t_end_s, &lo, &hi));
-    if (!(band->k_low_cm < lo - margin_cm && hi + margin_cm < band->k_high_cm)) {
-        return PMA_ERR_BAND;
-    }
+    if (margin_cm < 0.0f) return PMA_ERR_RANGE;
+    float lo_min, lo_max, hi_min, hi_max, r_min, r_max;
+    PMA_CHECK(pma_ref_bounds(&band->low, t_end_s, &lo_min, &lo_max));
+    PMA_CHECK(pma_ref_bounds(&band->high, t_end_s, &hi_min, &hi_max));
+    PMA_CHECK(pma_ref_bounds(cfg, t_end_s, &r_min, &r_max));
+    if (!(lo_max < r_min - margin_cm && r_max + margin_cm < hi_min)) return PMA_ERR_BAND;
     return PMA_OK;
 }
 
@@ -126,13 +146,12 @@ static void sincos_turns(float turns, float phase_rad, float *sn, float *cs)
     *cs = cosf(ph);
 }
 
-int pma_ref_eval_f32(pma_ref_f32_t *s, float t_s, float *xr_cm, float *xr_dot_cm_s)
+int pma_ref_value_f32(const pma_ref_config_t *c, float t_s, float *xr_cm, float *xr_dot_cm_s)
 {
-    if (s == NULL || xr_cm == NULL) return PMA_ERR_NULL;
-    if (!s->ready) return PMA_ERR_NOT_READY;
+    if (c == NULL || xr_cm == NULL) return PMA_ERR_NULL;
+    if (c->kind == PMA_REF_STREAM) return PMA_ERR_UNSUPPORTED;
     if (!isfinite(t_s)) return PMA_ERR_NOT_FINITE;
     if (t_s < 0.0f) return PMA_ERR_RANGE;
-    const pma_ref_config_t *c = &s->cfg;
     float x = c->offset_cm, d = 0.0f, sn, cs;
     switch (c->kind) {
     case PMA_REF_STEP:
@@ -170,25 +189,35 @@ int pma_ref_eval_f32(pma_ref_f32_t *s, float t_s, float *xr_cm, float *xr_dot_cm
         d = sn / 360.0f + t_s * cs * dphi / 360.0f;
         break;
     }
-    case PMA_REF_STREAM: {
-        const float dt = fmaxf(t_s - s->last_t, 0.0f);
-        const float old = s->stream_value;
-        float v = s->stream_target;
-        if (c->rate_cm_s > 0.0f) {
-            const float step = c->rate_cm_s * dt;
-            v = fminf(fmaxf(v, old - step), old + step);
-        }
-        s->stream_value = v;
-        s->last_t = t_s;
-        x = v;
-        d = dt > 0.0f ? (v - old) / dt : 0.0f;
+    case PMA_REF_HOLD:
         break;
-    }
-    default:              /* HOLD */
-        break;
+    default:
+        return PMA_ERR_RANGE;
     }
     *xr_cm = x;
     if (xr_dot_cm_s != NULL) *xr_dot_cm_s = d;
+    return PMA_OK;
+}
+
+int pma_ref_eval_f32(pma_ref_f32_t *s, float t_s, float *xr_cm, float *xr_dot_cm_s)
+{
+    if (s == NULL || xr_cm == NULL) return PMA_ERR_NULL;
+    if (!s->ready) return PMA_ERR_NOT_READY;
+    if (s->cfg.kind != PMA_REF_STREAM) return pma_ref_value_f32(&s->cfg, t_s, xr_cm, xr_dot_cm_s);
+    if (!isfinite(t_s)) return PMA_ERR_NOT_FINITE;
+    if (t_s < 0.0f) return PMA_ERR_RANGE;
+    /* STREAM: move towards the last target at most rate per second */
+    const float dt = fmaxf(t_s - s->last_t, 0.0f);
+    const float old = s->stream_value;
+    float v = s->stream_target;
+    if (s->cfg.rate_cm_s > 0.0f) {
+        const float step = s->cfg.rate_cm_s * dt;
+        v = fminf(fmaxf(v, old - step), old + step);
+    }
+    s->stream_value = v;
+    s->last_t = t_s;
+    *xr_cm = v;
+    if (xr_dot_cm_s != NULL) *xr_dot_cm_s = dt > 0.0f ? (v - old) / dt : 0.0f;
     return PMA_OK;
 }
 

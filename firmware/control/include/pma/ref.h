@@ -11,8 +11,9 @@
  *          most rate [cm/s] per second (rate 0: jump); starts at offset.
  * Units: x_r, offset, amplitude in cm; t, t0 in s; f in Hz; phase in rad;
  * rate in cm/s. The derivative x_r' [cm/s] is returned too (0 at steps).
- * Every generator stays within [min, max] given by pma_ref_bounds_* over
- * [0, t_end]; this is how a reference is checked against the band. */
+ * Every generator stays within [min, max] given by pma_ref_bounds over
+ * [0, t_end]; this is how a reference is checked against the band, whose
+ * edges are generators too. */
 #ifndef PMA_REF_H
 #define PMA_REF_H
 
@@ -41,21 +42,36 @@ typedef struct pma_ref_config {
 
 int pma_ref_validate_config(const pma_ref_config_t *cfg);
 
-/* Constant constraint band; valid when k_low < k_high, both finite. */
-typedef struct pma_band {
-    float k_low_cm, k_high_cm;
-} pma_band_t;
-
 /* Bounds of x_r over t in [0, t_end_s] (conservative for CASE3 and RAMP:
  * the envelope). STREAM reports [offset, offset] (streamed values are
  * checked one by one). */
 int pma_ref_bounds(const pma_ref_config_t *cfg, float t_end_s, float *min_cm, float *max_cm);
-/* PMA_OK when k_low < x_r - margin and x_r + margin < k_high for the whole
- * reference over [0, t_end] (eq. 14 with margin = w1), else PMA_ERR_BAND. */
+
+/* Evaluate a non-STREAM reference at t_s >= 0 without an instance (pure).
+ * STREAM: PMA_ERR_UNSUPPORTED. xr_dot_cm_s may be NULL. */
+int pma_ref_value_f32(const pma_ref_config_t *cfg, float t_s, float *xr_cm, float *xr_dot_cm_s);
+
+/* Output constraint band k_low(t) < x < k_high(t) (the paper's eq. 9): each
+ * edge is a reference generator of any kind but STREAM, so constant, step,
+ * ramp and sinusoidal bands are all expressed the same way. */
+typedef struct pma_band {
+    pma_ref_config_t low, high;
+} pma_band_t;
+
+/* A constant band k_low < x < k_high (HOLD edges). */
+pma_band_t pma_band_constant(float k_low_cm, float k_high_cm);
+/* Valid edges (not STREAM) and k_low(t) < k_high(t) on all of [0, t_end],
+ * checked conservatively: max k_low < min k_high (from pma_ref_bounds).
+ * PMA_OK or a negative code (PMA_ERR_BAND when the edges may cross). */
+int pma_band_validate(const pma_band_t *band, float t_end_s);
+/* 1 when k_low(t) < x < k_high(t), else 0 (NaN, invalid band or t: 0). */
+int pma_band_contains(const pma_band_t *band, float t_s, float x_cm);
+/* PMA_OK when k_low(t) < x_r(t) - margin and x_r(t) + margin < k_high(t)
+ * for all t in [0, t_end] (eq. 14 with margin = w1), checked conservatively
+ * from the bounds of the three generators: max k_low < min x_r - margin and
+ * max x_r + margin < min k_high. Else PMA_ERR_BAND. */
 int pma_band_check_ref(const pma_band_t *band, const pma_ref_config_t *cfg, float t_end_s,
                        float margin_cm);
-/* 1 when k_low < x < k_high, else 0 (NaN: 0). */
-int pma_band_contains(const pma_band_t *band, float x_cm);
 
 typedef struct pma_ref_f32 {
     pma_ref_config_t cfg;
