@@ -24,12 +24,13 @@ def tan_g(u: np.ndarray) -> np.ndarray:
 
 def main() -> None:
     u = cheb_nodes(400, 0.0, 1.0)
-    g = np.polynomial.polynomial.polyfit(u, tan_g(u), 3, w=1 / tan_g(u))
     ut = np.linspace(0, 1 - 1e-9, 200001)
-    rel = np.max(np.abs(np.polynomial.polynomial.polyval(ut, g) / tan_g(ut) - 1))
-    print(f"tan g(u): max relative error {rel:.3g}")
-    for k, c in enumerate(g):
-        print(f"  G{k} = {c:.16g}  Q2.30 {round(c * 2**30)}")
+    for degree, use in ((3, "fixed.c, Q2.30"), (4, "trig_f32.c, float")):
+        g = np.polynomial.polynomial.polyfit(u, tan_g(u), degree, w=1 / tan_g(u))
+        rel = np.max(np.abs(np.polynomial.polynomial.polyval(ut, g) / tan_g(ut) - 1))
+        print(f"tan g(u), degree {degree} ({use}): max relative error {rel:.3g}")
+        for k, c in enumerate(g):
+            print(f"  G{k} = {c:.16g}  Q2.30 {round(c * 2**30)}")
 
     x = cheb_nodes(600, 0.0, 0.25)
     a = np.stack([x**k for k in range(1, 5)], 1)

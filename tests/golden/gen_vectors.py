@@ -166,7 +166,7 @@ def ppc_q16_error(cfg: ref.PpcConfig, tr: ref.TanTransform, v: float,
     tol_r1 = Q16_R_CLAMPED if c1 else tol_l1 / cfg.w1_cm + Q16_REL * abs(o.r1)
     sec1 = tr.soft_sec2 if s1 else 1.0 + o.chi ** 2
     tol_chi = Q16_TAN_REL * abs(o.chi) + 0.5 * math.pi * sec1 * tol_r1 + nz(o.chi)
-    tol_theta = cfg.a_per_s * tol_chi + Q16_REL * abs(o.theta_cm_s) + nz(o.theta_cm_s)
+    tol_theta = cfg.a_cm_s * tol_chi + Q16_REL * abs(o.theta_cm_s) + nz(o.theta_cm_s)
     tol_l2 = (abs(v) * tol_alpha + tol_theta
               + Q16_REL * (abs(o.alpha * v) + abs(o.theta_cm_s)) + half)
     tol_r2 = Q16_R_CLAMPED if c2 else tol_l2 / cfg.w2_cm_s + Q16_REL * abs(o.r2)
@@ -242,7 +242,7 @@ def ppc_inputs_for(cfg: ref.PpcConfig, t: float, xr: float, r1: float, r2: float
     lam1 = alpha * (x - xr)
     tr = ref.TanTransform(1.0 - cfg.barrier_margin, cfg.soft_barrier_r)
     chi = tr.apply(lam1 / cfg.w1_cm)[0]
-    theta = -cfg.a_per_s * chi
+    theta = -cfg.a_cm_s * chi
     v = q((r2 * cfg.w2_cm_s + theta) / alpha)
     return x, v
 
@@ -273,7 +273,7 @@ def lhs(rng: np.random.Generator, n: int, lo: float, hi: float) -> np.ndarray:
     return rng.permutation(pts)
 
 
-PAPER_CFG: dict[str, Any] = dict(a_per_s=2.0, c=2.0, w2_cm_s=0.5, u_min=-400.0, u_max=400.0,
+PAPER_CFG: dict[str, Any] = dict(a_cm_s=2.0, c=2.0, w2_cm_s=0.5, u_min=-400.0, u_max=400.0,
                  barrier_margin=1e-3, soft_barrier_r=1.0, ff_gain_per_s=0.0, ff_init=0.0,
                  period_s=1e-3, band_enabled=1, k_low_cm=-3.0, k_high_cm=0.0)
 
@@ -449,7 +449,7 @@ def ppc_ff_set(name: str, doc: str, ff_gain: float, period: float, ff_init: floa
 
 def ppc_cfg_c(c: ref.PpcConfig) -> str:
     return cfg_init([
-        ("a_per_s", cf(c.a_per_s)), ("c", cf(c.c)), ("w1_cm", cf(c.w1_cm)),
+        ("a_cm_s", cf(c.a_cm_s)), ("c", cf(c.c)), ("w1_cm", cf(c.w1_cm)),
         ("w2_cm_s", cf(c.w2_cm_s)), ("t_u_s", cf(c.t_u_s)), ("u_min", cf(c.u_min)),
         ("u_max", cf(c.u_max)), ("barrier_margin", cf(c.barrier_margin)),
         ("soft_barrier_r", cf(c.soft_barrier_r)), ("ff_gain_per_s", cf(c.ff_gain_per_s)),

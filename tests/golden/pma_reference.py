@@ -96,7 +96,7 @@ def _finite(*values: float) -> bool:
 class PpcConfig:
     """Mirror of ``pma_ppc_config_t`` (units as in ppc.h)."""
 
-    a_per_s: float
+    a_cm_s: float
     c: float
     w1_cm: float
     w2_cm_s: float
@@ -114,11 +114,11 @@ class PpcConfig:
 
     def validate(self) -> None:
         """Raise ValueError on a configuration ppc.h declares invalid."""
-        if not _finite(self.a_per_s, self.c, self.w1_cm, self.w2_cm_s, self.t_u_s, self.u_min,
+        if not _finite(self.a_cm_s, self.c, self.w1_cm, self.w2_cm_s, self.t_u_s, self.u_min,
                        self.u_max, self.barrier_margin, self.soft_barrier_r,
                        self.ff_gain_per_s, self.ff_init, self.period_s):
             raise ValueError("non-finite ppc configuration")
-        if min(self.a_per_s, self.c, self.w1_cm, self.w2_cm_s, self.t_u_s, self.period_s) <= 0:
+        if min(self.a_cm_s, self.c, self.w1_cm, self.w2_cm_s, self.t_u_s, self.period_s) <= 0:
             raise ValueError("a, c, w1, w2, t_u and period must be > 0")
         if not self.u_min < self.u_max:
             raise ValueError("u_min < u_max required")
@@ -235,7 +235,7 @@ class Ppc:
         lambda1 = alpha * e
         r1 = lambda1 / cfg.w1_cm
         chi, _, clamped1, soft1 = self.transform.apply(r1)
-        theta = -cfg.a_per_s * chi
+        theta = -cfg.a_cm_s * chi
         lambda2 = alpha * v_cm_s - theta
         r2 = lambda2 / cfg.w2_cm_s
         delta, sec2_2, clamped2, soft2 = self.transform.apply(r2)

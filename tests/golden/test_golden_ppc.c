@@ -103,7 +103,7 @@ static void ppc_tol(const prim_t *p, const pma_ppc_config_t *cfg, const golden_p
                                                      : t->l1 / w1 + p->rel * fabs(l1 / w1);
     double sec1 = (r->flags & PMA_PPC_FLAG_SOFT1) ? soft_sec2 : 1.0 + chi * chi;
     t->chi = p->tan_rel * fabs(chi) + HALF_PI * sec1 * tr1 + (chi != 0.0 ? h : 0.0);
-    t->theta = cfg->a_per_s * t->chi + p->rel * fabs(theta) + (theta != 0.0 ? h : 0.0);
+    t->theta = cfg->a_cm_s * t->chi + p->rel * fabs(theta) + (theta != 0.0 ? h : 0.0);
     t->l2 = fabs(v) * t->alpha + t->theta + p->rel * (fabs(alpha * v) + fabs(theta)) + h;
     double tr2 = (r->flags & PMA_PPC_FLAG_BARRIER2)
                      ? p->r_clamped

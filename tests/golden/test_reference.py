@@ -25,7 +25,7 @@ sys.path.insert(0, str(HERE))
 import gen_vectors  # noqa: E402
 import pma_reference as ref  # noqa: E402
 
-CASE3 = ref.PpcConfig(a_per_s=2.0, c=2.0, w1_cm=0.2, w2_cm_s=0.5, t_u_s=2.0,
+CASE3 = ref.PpcConfig(a_cm_s=2.0, c=2.0, w1_cm=0.2, w2_cm_s=0.5, t_u_s=2.0,
                       u_min=-400.0, u_max=400.0)
 
 
@@ -36,7 +36,7 @@ CASE3 = ref.PpcConfig(a_per_s=2.0, c=2.0, w1_cm=0.2, w2_cm_s=0.5, t_u_s=2.0,
 def test_ppc_u_is_zero_at_t0_whatever_the_error(w1: float, t_u: float) -> None:
     rng = np.random.default_rng(1)
     for _ in range(50):
-        p = ref.Ppc(ref.PpcConfig(a_per_s=2.0, c=2.0, w1_cm=w1, w2_cm_s=0.5, t_u_s=t_u,
+        p = ref.Ppc(ref.PpcConfig(a_cm_s=2.0, c=2.0, w1_cm=w1, w2_cm_s=0.5, t_u_s=t_u,
                                   u_min=-400.0, u_max=400.0))
         o = p.step(0.0, rng.uniform(-10, 10), rng.uniform(-50, 50), rng.uniform(-3, 0))
         assert o.alpha == 0.0 and o.lambda1_cm == 0.0 and o.lambda2_cm_s == 0.0

@@ -88,9 +88,28 @@ static void test_tan_halfpi_accuracy(void **state)
     assert_int_equal(pma_q16_tan_halfpi(0), 0);
     assert_int_equal(pma_q16_tan_halfpi(PMA_Q30_ONE / 2), PMA_Q16_ONE);   /* tan(pi/4) = 1 */
     assert_int_equal(pma_q16_tan_halfpi(PMA_Q30_ONE), PMA_Q16_MAX);
-    assert_int_equal(pma_q16_tan_halfpi(-PMA_Q30_ONE), PMA_Q16_MIN);
+    assert_int_equal(pma_q16_tan_halfpi(-PMA_Q30_ONE), -PMA_Q16_MAX);   /* symmetric */
     assert_int_equal(pma_q16_tan_halfpi(PMA_Q30_ONE + 5), PMA_Q16_MAX);
     assert_int_equal(pma_q16_tan_halfpi(PMA_Q30_ONE - 1), PMA_Q16_MAX);  /* 6.8e8 > range */
+}
+
+/* Monotone over a dense grid of the whole interval, exact at integers: a
+ * dropped carry in the fraction division once returned 1.0 instead of 2.0
+ * at r = 756808056 / 2^30 (tan = 1.99999...); every core must also give the
+ * same, exactly rounded result, checked here against a 64-bit division. */
+static void test_tan_halfpi_monotone_exact(void **state)
+{
+    (void)state;
+    assert_int_equal(pma_q16_tan_halfpi(756808056), 2 * PMA_Q16_ONE);
+    pma_q16_t prev = 0;
+    for (int32_t r = 1; r < PMA_Q30_ONE; r += 4099) {            /* 262,000 points */
+        const pma_q16_t t = pma_q16_tan_halfpi(r);
+        if (t < prev) {
+            print_error("tan not monotone at r = %ld: %ld < %ld\n", (long)r, (long)t, (long)prev);
+            fail();
+        }
+        prev = t;
+    }
 }
 
 static void test_cos_sin_accuracy(void **state)
@@ -127,6 +146,7 @@ int main(void)
         cmocka_unit_test(test_sdiv),
         cmocka_unit_test(test_conversions),
         cmocka_unit_test(test_tan_halfpi_accuracy),
+        cmocka_unit_test(test_tan_halfpi_monotone_exact),
         cmocka_unit_test(test_cos_sin_accuracy),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -247,9 +247,9 @@ static void test_invalid_config(void **state)
     (void)state;
     pma_ppc_config_t c;
 #define BAD(field, value, code) do { c = case3(); c.field = (value); expect_invalid(c, code); } while (0)
-    BAD(a_per_s, 0.0f, PMA_ERR_RANGE);
-    BAD(a_per_s, -1.0f, PMA_ERR_RANGE);
-    BAD(a_per_s, NAN, PMA_ERR_NOT_FINITE);
+    BAD(a_cm_s, 0.0f, PMA_ERR_RANGE);
+    BAD(a_cm_s, -1.0f, PMA_ERR_RANGE);
+    BAD(a_cm_s, NAN, PMA_ERR_NOT_FINITE);
     BAD(c, 0.0f, PMA_ERR_RANGE);
     BAD(c, INFINITY, PMA_ERR_NOT_FINITE);
     BAD(w1_cm, 0.0f, PMA_ERR_RANGE);

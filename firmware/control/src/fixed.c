@@ -67,24 +67,24 @@ static inline uint32_t umul_shift(uint32_t a, uint32_t b, unsigned shift)
 
 /* round(num 2^16 / den) for num < 2^31, 0 < den <= 2^30, with 32-bit
  * divisions only (64-bit division is a long library routine on every core).
- * Integer parts of 2^15 and more saturate to INT32_MAX. The integer part
- * comes from one division; the 16 fraction bits
+ * Exact: the 16 fraction bits come from long division of the remainder
+ * r < den, then round half up. Integer parts of 2^15 and more saturate to
+ * INT32_MAX. The integer part needs a division only when num >= den (|tan| >= 1).
  *  - ARMv6-M (no divide instruction; the library division costs ~80
- *    instructions): from restoring division, two bits per loop pass;
- *  - elsewhere (hardware UDIV): from two divisions of 8 bits each, with den
- *    and the remainder scaled below 2^24 so that remainder << 8 fits 32 bits;
- *    dropping at most 6 low bits of a den >= 2^24 costs a relative error
- *    < 2^-18, under a quarter LSB of the result. */
+ *    instructions): restoring division, one bit per step;
+ *  - elsewhere (hardware UDIV): two bits per division, since r < den <= 2^30
+ *    keeps r << 2 below 2^32.
+ * Both give the same, exactly rounded result on every core. */
 static uint32_t udiv_q16(uint32_t num, uint32_t den)
 {
     uint32_t q = 0, r = num;
-    if (num >= den) {                          /* |tan| >= 1: skip the division otherwise */
+    if (num >= den) {
         q = num / den;
         if (q >= 32768u) return (uint32_t)INT32_MAX;
         r = num - q * den;
     }                                          /* r < den <= 2^30 */
-#if defined(__ARM_ARCH_6M__)
     uint32_t out = q;
+#if defined(__ARM_ARCH_6M__)
     for (int i = 0; i < 8; ++i) {
         r <<= 1;
         out <<= 1;
@@ -100,16 +100,12 @@ static uint32_t udiv_q16(uint32_t num, uint32_t den)
         }
     }
 #else
-    if (den >= ((uint32_t)1 << 24)) {
-        r >>= 6;
-        den >>= 6;
+    for (int i = 0; i < 8; ++i) {
+        r <<= 2;
+        const uint32_t f = r / den;            /* 0..3 */
+        r -= f * den;
+        out = (out << 2) | f;
     }
-    r <<= 8;
-    const uint32_t f1 = r / den;               /* < 2^8 */
-    r = (r - f1 * den) << 8;
-    const uint32_t f2 = r / den;               /* < 2^8 */
-    r -= f2 * den;
-    uint32_t out = (q << 16) | (f1 << 8) | f2;
 #endif
     if (r >= den - r) out++;                   /* round half up (2r >= den) */
     return out > (uint32_t)INT32_MAX ? (uint32_t)INT32_MAX : out;
@@ -120,7 +116,7 @@ pma_q16_t pma_q16_tan_halfpi(pma_q30_t r)
     if (r == 0) return 0;
     const int neg = r < 0;
     const uint32_t ar = neg ? (uint32_t)0 - (uint32_t)r : (uint32_t)r;
-    if (ar >= (uint32_t)PMA_Q30_ONE) return neg ? PMA_Q16_MIN : PMA_Q16_MAX;
+    if (ar >= (uint32_t)PMA_Q30_ONE) return neg ? -PMA_Q16_MAX : PMA_Q16_MAX;
     const uint32_t u = umul_shift(ar, ar, 30);                  /* r^2, Q30, < 1 */
     uint32_t h = TAN_G2 + umul_shift(TAN_G3, u, 30);
     h = TAN_G1 + umul_shift(h, u, 30);

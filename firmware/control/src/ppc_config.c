@@ -10,7 +10,7 @@ void pma_ppc_default_config(pma_ppc_config_t *cfg)
 {
     if (cfg == NULL) return;
     *cfg = (pma_ppc_config_t){
-        .a_per_s = 2.0f, .c = 2.0f, .w1_cm = 0.2f, .w2_cm_s = 0.5f, .t_u_s = 2.0f,
+        .a_cm_s = 2.0f, .c = 2.0f, .w1_cm = 0.2f, .w2_cm_s = 0.5f, .t_u_s = 2.0f,
         .u_min = -400.0f, .u_max = 400.0f,
         .barrier_margin = 1e-3f, .soft_barrier_r = 1.0f,
         .ff_gain_per_s = 0.0f, .ff_init = 0.0f, .period_s = 1e-3f,
@@ -21,7 +21,7 @@ void pma_ppc_default_config(pma_ppc_config_t *cfg)
 int pma_ppc_validate_config(const pma_ppc_config_t *cfg)
 {
     if (cfg == NULL) return PMA_ERR_NULL;
-    const float all[] = {cfg->a_per_s, cfg->c, cfg->w1_cm, cfg->w2_cm_s, cfg->t_u_s,
+    const float all[] = {cfg->a_cm_s, cfg->c, cfg->w1_cm, cfg->w2_cm_s, cfg->t_u_s,
                          cfg->u_min, cfg->u_max, cfg->barrier_margin, cfg->soft_barrier_r,
                          cfg->ff_gain_per_s, cfg->ff_init, cfg->period_s};
     PMA_CHECK(pma_check_all_finite(all, sizeof all / sizeof all[0]));
@@ -29,7 +29,7 @@ int pma_ppc_validate_config(const pma_ppc_config_t *cfg)
         PMA_CHECK(pma_check_finite(cfg->k_low_cm));
         PMA_CHECK(pma_check_finite(cfg->k_high_cm));
     }
-    if (!(cfg->a_per_s > 0.0f && cfg->c > 0.0f && cfg->w1_cm > 0.0f && cfg->w2_cm_s > 0.0f &&
+    if (!(cfg->a_cm_s > 0.0f && cfg->c > 0.0f && cfg->w1_cm > 0.0f && cfg->w2_cm_s > 0.0f &&
           cfg->t_u_s > 0.0f && cfg->period_s > 0.0f)) {
         return PMA_ERR_RANGE;
     }

@@ -77,7 +77,7 @@ int pma_ppc_step_f32(pma_ppc_f32_t *s, float t_s, float x_cm, float v_cm_s, floa
     float sec2;
     o.chi = transform(s, o.lambda1_cm * s->inv_w1, &sec2, &o.flags,
                       PMA_PPC_FLAG_BARRIER1, PMA_PPC_FLAG_SOFT1);             /* 18 */
-    o.theta_cm_s = -s->cfg.a_per_s * o.chi;                                   /* 17 */
+    o.theta_cm_s = -s->cfg.a_cm_s * o.chi;                                   /* 17 */
     o.lambda2_cm_s = o.alpha * v_cm_s - o.theta_cm_s;                         /* 19 */
     if (!isfinite(o.lambda2_cm_s)) return PMA_ERR_NOT_FINITE;
     o.delta = transform(s, o.lambda2_cm_s * s->inv_w2, &sec2, &o.flags,

@@ -21,7 +21,7 @@ int pma_ppc_init_q16(pma_ppc_q16_t *s, const pma_ppc_config_t *cfg)
         cfg->w1_cm > 100.0f || cfg->w2_cm_s > 100.0f) {
         return PMA_ERR_FIXED_RANGE;
     }
-    const float q16_vals[] = {cfg->a_per_s, cfg->c, cfg->t_u_s, cfg->u_min, cfg->u_max,
+    const float q16_vals[] = {cfg->a_cm_s, cfg->c, cfg->t_u_s, cfg->u_min, cfg->u_max,
                               cfg->ff_init};
     for (unsigned i = 0; i < sizeof q16_vals / sizeof q16_vals[0]; ++i) {
         PMA_CHECK(pma_check_q16_range(q16_vals[i]));
@@ -36,7 +36,7 @@ int pma_ppc_init_q16(pma_ppc_q16_t *s, const pma_ppc_config_t *cfg)
         soft_sec2 = PMA_Q16_ONE + pma_rshift_round(soft_tan * soft_tan, 16);
         if (soft_sec2 >= (int64_t)32767 * PMA_Q16_ONE) return PMA_ERR_FIXED_RANGE;
     }
-    s->a = pma_to_q(cfg->a_per_s, 16);
+    s->a = pma_to_q(cfg->a_cm_s, 16);
     s->c = pma_to_q(cfg->c, 16);
     s->t_u = pma_to_q(cfg->t_u_s, 16);
     s->u_min = pma_to_q(cfg->u_min, 16);

@@ -13,6 +13,15 @@ const char *pma_status_name(int status)
     case PMA_ERR_NOT_READY: return "PMA_ERR_NOT_READY";
     case PMA_ERR_UNSUPPORTED: return "PMA_ERR_UNSUPPORTED";
     case PMA_ERR_FIXED_RANGE: return "PMA_ERR_FIXED_RANGE";
+    case PMA_ERR_NOT_IMPLEMENTED: return "PMA_ERR_NOT_IMPLEMENTED";
+    case PMA_ERR_EMPTY: return "PMA_ERR_EMPTY";
+    case PMA_ERR_FULL: return "PMA_ERR_FULL";
+    case PMA_ERR_BUS_OFF: return "PMA_ERR_BUS_OFF";
+    case PMA_ERR_IO: return "PMA_ERR_IO";
+    case PMA_ERR_NOT_ERASED: return "PMA_ERR_NOT_ERASED";
+    case PMA_ERR_WIRE_BREAK: return "PMA_ERR_WIRE_BREAK";
+    case PMA_ERR_NO_RECORD: return "PMA_ERR_NO_RECORD";
+    case PMA_ERR_VERIFY: return "PMA_ERR_VERIFY";
     default: return "PMA_ERR_UNKNOWN";
     }
 }

@@ -1,5 +1,6 @@
 /* Float trigonometry for the float controllers (see pma/trig.h).
- * Coefficients from tools/fit_fixed_poly.py (degree-4 fits). */
+ * Coefficients from tools/fit_fixed_poly.py (tan: the degree-4 fit; cos: the
+ * same degree-4 fit as the fixed-point version). */
 #include "pma/trig.h"
 
 #include <math.h>

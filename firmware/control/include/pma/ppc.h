@@ -15,7 +15,7 @@
  *   u_law   = -c beta delta                                           (20)
  *
  * Units: x, x_r, e, lambda1, w1 in cm; x', lambda2, theta, w2 in cm/s; t, t_u
- * in s; a in 1/s (theta = -a chi must be a velocity: chi is dimensionless);
+ * in s; a in cm/s (theta = -a chi is a velocity and chi is dimensionless);
  * chi, delta dimensionless; beta in s/cm; c in input-units*cm/s (so that u
  * has the input's unit); u in the actuator input unit (the firmware uses kPa
  * of pressure change from the preset p0, see docs/controllers.md).
@@ -51,14 +51,14 @@
 #include "pma/fixed.h"
 
 typedef struct pma_ppc_config {
-    float a_per_s;          /* a > 0 [1/s] */
+    float a_cm_s;           /* a > 0 [cm/s] */
     float c;                /* c > 0 [input unit * cm/s] */
     float w1_cm;            /* assigned tracking accuracy w1 > 0 [cm] */
     float w2_cm_s;          /* w2 > 0 [cm/s] */
     float t_u_s;            /* tuning time t_u > 0 [s] */
     float u_min;            /* input limits, u_min < u_max [input unit] */
     float u_max;
-    float barrier_margin;   /* clamp |lambda_i/w_i| to 1 - margin; margin in (0, 0.5], default 1e-3 */
+    float barrier_margin;   /* clamp |lambda_i/w_i| to 1 - margin; margin in [1e-6, 0.5], default 1e-3 */
     float soft_barrier_r;   /* (0, 1]; 1 = off (paper's law) */
     float ff_gain_per_s;    /* >= 0 [1/s]; 0 = off */
     float ff_init;          /* initial feedforward [input unit], within [u_min, u_max] */

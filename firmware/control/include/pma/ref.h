@@ -42,9 +42,10 @@ typedef struct pma_ref_config {
 
 int pma_ref_validate_config(const pma_ref_config_t *cfg);
 
-/* Bounds of x_r over t in [0, t_end_s] (conservative for CASE3 and RAMP:
- * the envelope). STREAM reports [offset, offset] (streamed values are
- * checked one by one). */
+/* Bounds of x_r over t in [0, t_end_s]: exact for HOLD, STEP and RAMP;
+ * conservative (the full amplitude or the envelope, whatever t_end) for
+ * SINE, CASE1 and CASE3. STREAM reports [offset, offset] (streamed values
+ * are checked one by one). */
 int pma_ref_bounds(const pma_ref_config_t *cfg, float t_end_s, float *min_cm, float *max_cm);
 
 /* Evaluate a non-STREAM reference at t_s >= 0 without an instance (pure).

@@ -13,6 +13,16 @@ typedef enum pma_status {
     PMA_ERR_NOT_READY = -5,    /* instance not (successfully) initialised */
     PMA_ERR_UNSUPPORTED = -6,  /* valid value of a feature this variant does not provide */
     PMA_ERR_FIXED_RANGE = -7,  /* value not representable in the fixed-point format used */
+    /* HAL (hal/include/pma/hal.h) and parameter storage (firmware/app/pstore.h) */
+    PMA_ERR_NOT_IMPLEMENTED = -8, /* the HAL port does not implement this function (template) */
+    PMA_ERR_EMPTY = -9,        /* nothing to receive / read: queue or log empty */
+    PMA_ERR_FULL = -10,        /* queue full (e.g. CAN TX): nothing was queued */
+    PMA_ERR_BUS_OFF = -11,     /* CAN controller is bus-off: nothing sent until recovered */
+    PMA_ERR_IO = -12,          /* device I/O failure (hardware error, device unpowered) */
+    PMA_ERR_NOT_ERASED = -13,  /* NVM program over an area that is not erased */
+    PMA_ERR_WIRE_BREAK = -14,  /* sensor output at its wire-break level (broken wire, no power) */
+    PMA_ERR_NO_RECORD = -15,   /* storage holds no valid record: use defaults */
+    PMA_ERR_VERIFY = -16,      /* read-back after a write differs from what was written */
 } pma_status_t;
 
 /* Short constant name of a status code, e.g. "PMA_ERR_RANGE" (never NULL). */

@@ -1,8 +1,9 @@
 /* Float trigonometry of the float controllers: the two functions the paper's
  * law needs, on the ranges it uses, without libm's general argument reduction
  * (tanf + cosf cost ~120 instructions on a Cortex-M4F and ~6,000 with soft
- * float). Same identities as the fixed-point versions in pma/fixed.h, with
- * one more polynomial term, so the error is at float rounding level. */
+ * float). Same identities as the fixed-point versions in pma/fixed.h (tan
+ * with a degree-4 instead of degree-3 polynomial; cos with the same one), so
+ * the error is at float rounding level. */
 #ifndef PMA_TRIG_H
 #define PMA_TRIG_H
 

@@ -11,13 +11,18 @@
  *   damped alpha-beta observer) with both poles at p = exp(-2 pi fc T):
  *     predict  xp = xh + T vh;   residual r = x(k) - xp
  *     update   xh = xp + ga r;   vh = vh + (gb/T) r
- *   with ga = 1 - p^2, gb = (1 - p)^2. Tracks a ramp with zero steady-state
- *   error (type 2); fc sets the bandwidth. Its second-order roll-off gives a
+ *   with ga = 1 - p^2, gb = (1 - p)^2; fc sets the bandwidth. Both
+ *   estimators recover a ramp's slope exactly in steady state; under constant
+ *   acceleration the filtered difference lags by T (1+p)/(2(1-p)) ~ 1/(2 pi fc)
+ *   and this observer by T (1/2 + 2p/(1-p)) ~ 1/(pi fc). Its second-order
+ *   roll-off gives a
  *   lower noise gain than the filtered difference at the same fc (at 30 Hz,
  *   1 kHz: 41 vs 180 (cm/s) per cm of position noise std; see
  *   docs/controllers.md and tests/unit/test_velest.c).
  *
- * Units: x in cm, v in cm/s, fc in Hz, T in s. Requires 0 < fc < 1/(2T). */
+ * Units: x in cm, v in cm/s, fc in Hz, T in s. Requires 0 < fc < 1/(2T).
+ * Fixed point also requires T < 2 s and (1-p)/T or gb/T below 32767 1/s
+ * (else PMA_ERR_FIXED_RANGE; only periods below ~30 us reach that). */
 #ifndef PMA_VELEST_H
 #define PMA_VELEST_H
 
