@@ -16,9 +16,11 @@
  *   then 0xFF up to the next multiple of the program size.
  *
  * A record is valid when magic, format version, length and CRC check out.
- * Save writes the slot that does NOT hold the newest valid record (erase,
- * program, read back) with sequence + 1; the newest record is never touched,
- * so after a cut anywhere in a save a load finds either it or the new one.
+ * Save writes the slot that does NOT hold the newest valid record with
+ * sequence + 1: it erases the blocks the new record covers, programs the
+ * record front to back in chunks, and reads it back. The newest record is
+ * never touched, so after a power cut anywhere in a save a load finds either
+ * it or the complete new one (tests/hal/test_pstore_powercut.c).
  * Load takes the valid record with the newer sequence number (serial-number
  * arithmetic, RFC 1982: so the counter may wrap) and falls back to the other
  * slot when that one is invalid.
@@ -74,7 +76,8 @@ int pma_pstore_load(const pma_pstore_t *ps, void *blob, size_t capacity,
 
 /* Saves len bytes of blob (len 0 allowed) as the newest record. PMA_ERR_RANGE:
  * len above the capacity, nothing changed. PMA_ERR_VERIFY: the read-back
- * differed (the slot is erased again; the previous record stays the newest).
+ * differed (worn flash): the new record's first block is erased again so it
+ * can never load, and the previous record stays the newest.
  * A HAL error (PMA_ERR_IO: e.g. power lost) leaves the previous record the
  * newest, or, if the cut fell after the record was complete, the new one. */
 int pma_pstore_save(const pma_pstore_t *ps, const void *blob, size_t len,

@@ -22,6 +22,7 @@ const char *pma_status_name(int status)
     case PMA_ERR_WIRE_BREAK: return "PMA_ERR_WIRE_BREAK";
     case PMA_ERR_NO_RECORD: return "PMA_ERR_NO_RECORD";
     case PMA_ERR_VERIFY: return "PMA_ERR_VERIFY";
+    case PMA_ERR_CORRUPT: return "PMA_ERR_CORRUPT";
     default: return "PMA_ERR_UNKNOWN";
     }
 }

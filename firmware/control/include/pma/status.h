@@ -23,6 +23,7 @@ typedef enum pma_status {
     PMA_ERR_WIRE_BREAK = -14,  /* sensor output at its wire-break level (broken wire, no power) */
     PMA_ERR_NO_RECORD = -15,   /* storage holds no valid record: use defaults */
     PMA_ERR_VERIFY = -16,      /* read-back after a write differs from what was written */
+    PMA_ERR_CORRUPT = -17,     /* stored data failed the device's integrity check (flash ECC) */
 } pma_status_t;
 
 /* Short constant name of a status code, e.g. "PMA_ERR_RANGE" (never NULL). */
