@@ -19,7 +19,6 @@ int pma_ppc_init_f32(pma_ppc_f32_t *s, const pma_ppc_config_t *cfg)
     s->inv_w1 = 1.0f / cfg->w1_cm;
     s->inv_w2 = 1.0f / cfg->w2_cm_s;
     s->r_max = 1.0f - cfg->barrier_margin;
-    s->soft_r = cfg->soft_barrier_r;
     s->soft_tan = (cfg->soft_barrier_r < 1.0f) ? pma_tan_halfpi_f32(cfg->soft_barrier_r) : 0.0f;
     s->soft_sec2 = 1.0f + s->soft_tan * s->soft_tan;
     pma_ppc_reset_f32(s);
@@ -48,10 +47,10 @@ static float transform(const pma_ppc_f32_t *s, float r, float *sec2, uint32_t *f
         ar = s->r_max;
     }
     float t;
-    if (ar > s->soft_r) {
+    if (ar > s->cfg.soft_barrier_r) {
         *flags |= soft_flag;
         *sec2 = s->soft_sec2;
-        t = s->soft_tan + HALF_PI_F * s->soft_sec2 * (ar - s->soft_r);
+        t = s->soft_tan + HALF_PI_F * s->soft_sec2 * (ar - s->cfg.soft_barrier_r);
     } else {
         t = pma_tan_halfpi_f32(ar);
         *sec2 = 1.0f + t * t;

@@ -40,9 +40,9 @@ float pma_velest_noise_gain(const pma_velest_config_t *cfg)
     if (cfg->kind == PMA_VELEST_FILTERED_DIFF) {
         return (float)((1.0 - p) / T * sqrt(2.0 / (1.0 + p)));
     }
-    /* alpha-beta observer with a double pole at p: transfer x -> v is
-     * (gb/T)(1 - z^-1)^2 z / ((z - p)^2) ... evaluated by summing the impulse
-     * response (converges geometrically; 1e5 terms is far beyond 1e-12). */
+    /* tracking observer (double pole at p): the steady-state variance is the
+     * sum of the squared impulse response from x to v, summed until the
+     * terms are negligible (they decay geometrically, like p^k). */
     const double ga = 1.0 - p * p, gb = (1.0 - p) * (1.0 - p);
     double xh = 0.0, vh = 0.0, sum = 0.0;
     for (int k = 0; k < 100000; ++k) {

@@ -24,10 +24,6 @@ typedef int32_t pma_q30_t;
 #define PMA_Q16_MIN ((pma_q16_t)INT32_MIN)
 #define PMA_Q30_ONE ((pma_q30_t)0x40000000)
 
-/* Compile-time constant from a literal (rounded); only for in-range literals. */
-#define PMA_Q16_C(x) ((pma_q16_t)((x) >= 0 ? (x) * 65536.0 + 0.5 : (x) * 65536.0 - 0.5))
-#define PMA_Q30_C(x) ((pma_q30_t)((x) >= 0 ? (x) * 1073741824.0 + 0.5 : (x) * 1073741824.0 - 0.5))
-
 /* ---- building blocks (inline: they are the inner loop of every *_q16 step) ---- */
 
 #if defined(__ARM_ARCH_6M__)

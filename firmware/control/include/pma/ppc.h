@@ -95,7 +95,7 @@ typedef struct pma_ppc_out_f32 {
 typedef struct pma_ppc_f32 {
     /* configuration, derived once at init */
     pma_ppc_config_t cfg;
-    float inv_w1, inv_w2, r_max, soft_r;
+    float inv_w1, inv_w2, r_max;
     float soft_tan, soft_sec2;  /* tan and sec^2 of (pi/2) soft_r */
     /* state */
     float u_ff;
