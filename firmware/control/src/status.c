@@ -23,6 +23,12 @@ const char *pma_status_name(int status)
     case PMA_ERR_NO_RECORD: return "PMA_ERR_NO_RECORD";
     case PMA_ERR_VERIFY: return "PMA_ERR_VERIFY";
     case PMA_ERR_CORRUPT: return "PMA_ERR_CORRUPT";
+    case PMA_ERR_UNKNOWN_ID: return "PMA_ERR_UNKNOWN_ID";
+    case PMA_ERR_TYPE: return "PMA_ERR_TYPE";
+    case PMA_ERR_STATE: return "PMA_ERR_STATE";
+    case PMA_ERR_UNKNOWN_COMMAND: return "PMA_ERR_UNKNOWN_COMMAND";
+    case PMA_ERR_LENGTH: return "PMA_ERR_LENGTH";
+    case PMA_ERR_FAULT: return "PMA_ERR_FAULT";
     default: return "PMA_ERR_UNKNOWN";
     }
 }

@@ -146,7 +146,13 @@ int pma_hal_tick_start(uint32_t period_us);
  * previous cycle overran into this period (returns at once, this tick is
  * served late); n > 1 when n - 1 ticks were skipped entirely (returns at once
  * for the latest one; ticks are never queued up). PMA_ERR_NOT_READY: tick
- * not started. */
+ * not started.
+ * PMA_ERR_EMPTY: woken without a tick. Only a port whose ticks are driven by
+ * received frames (host lockstep mode: a tick is the arrival of a sensor
+ * sample frame) returns it: when any other frame arrives, and at least every
+ * few milliseconds while none does, so that the main loop still serves
+ * commands while the plant is paused. The loop then handles received frames
+ * and calls pma_hal_tick_wait() again without running the control step. */
 int pma_hal_tick_wait(uint32_t *late_ticks);
 
 /* ----------------------------------------------------------------- NVM -- */

@@ -24,6 +24,13 @@ typedef enum pma_status {
     PMA_ERR_NO_RECORD = -15,   /* storage holds no valid record: use defaults */
     PMA_ERR_VERIFY = -16,      /* read-back after a write differs from what was written */
     PMA_ERR_CORRUPT = -17,     /* stored data failed the device's integrity check (flash ECC) */
+    /* Application and CAN protocol (firmware/app) */
+    PMA_ERR_UNKNOWN_ID = -18,  /* no parameter with this id */
+    PMA_ERR_TYPE = -19,        /* value of the wrong type for this parameter */
+    PMA_ERR_STATE = -20,       /* not allowed in the current state (e.g. safety limits while RUNNING) */
+    PMA_ERR_UNKNOWN_COMMAND = -21, /* command, operation or selector value not defined */
+    PMA_ERR_LENGTH = -22,      /* CAN frame with the wrong data length for its message */
+    PMA_ERR_FAULT = -23,       /* refused because a fault is latched (clear faults first) */
 } pma_status_t;
 
 /* Short constant name of a status code, e.g. "PMA_ERR_RANGE" (never NULL). */
