@@ -1,0 +1,433 @@
+/* The application's loop, state machine and output: see app.h. Frames and
+ * their encoding are in app_frames.c. */
+#include "app.h"
+
+#include <math.h>
+#include <stddef.h>
+#include <string.h>
+
+#include "actuator.h"
+#include "app_internal.h"
+
+_Static_assert(PMA_PARAMS_BLOB_BYTES <= PMA_PSTORE_MAX_BLOB_BYTES,
+               "the parameter blob must fit a storage record");
+
+const char *pma_app_state_name(int state)
+{
+    static const char *const names[] = {"BOOT", "IDLE", "ARMED", "RUNNING", "FAULT"};
+    if (state < 0 || (size_t)state >= sizeof names / sizeof names[0]) return "UNKNOWN";
+    return names[state];
+}
+
+pma_param_phase_t pma_app_phase(const pma_app_t *app)
+{
+    switch (app->state) {
+    case PMA_STATE_ARMED: return PMA_PHASE_ARMED;
+    case PMA_STATE_RUNNING: return PMA_PHASE_RUNNING;
+    default: return PMA_PHASE_INACTIVE;
+    }
+}
+
+static int output_active(const pma_app_t *app)
+{
+    return app->state == PMA_STATE_ARMED || app->state == PMA_STATE_RUNNING;
+}
+
+void pma_app_raise_fault(pma_app_t *app, pma_fault_t fault)
+{
+    if (app == NULL || fault == PMA_FAULT_NONE) return;
+    if (app->state != PMA_STATE_FAULT) {
+        app->state = PMA_STATE_FAULT;
+        app->fault = (uint8_t)fault;
+    }
+}
+
+/* --------------------------------------------------------- configuration -- */
+
+void pma_app_adc_scaling(const pma_params_t *p, pma_adc_scaling_t *s)
+{
+    *s = (pma_adc_scaling_t){
+        .offset_cm = p->adc_offset_cm, .gain_cm_per_count = p->adc_gain_cm_per_count,
+        .raw_min_counts = (uint16_t)p->adc_raw_min_counts,
+        .raw_max_counts = (uint16_t)p->adc_raw_max_counts,
+        .wire_break_below_counts = (uint16_t)p->adc_wire_break_below_counts,
+    };
+}
+
+static void dac_scaling(const pma_params_t *p, pma_dac_scaling_t *s)
+{
+    *s = (pma_dac_scaling_t){
+        .counts_at_zero_kpa = p->dac_counts_at_zero_kpa, .counts_per_kpa = p->dac_counts_per_kpa,
+        .min_counts = (uint16_t)p->dac_min_counts, .max_counts = (uint16_t)p->dac_max_counts,
+    };
+}
+
+static void actuator_config(const pma_params_t *p, pma_actuator_config_t *c)
+{
+    *c = (pma_actuator_config_t){
+        .p0_kpa = p->act_p0_kpa, .kpa_per_u = p->act_kpa_per_u, .polarity = p->act_polarity,
+        .p_min_kpa = p->act_p_min_kpa, .p_max_kpa = p->act_p_max_kpa,
+        .slew_kpa_s = p->act_slew_kpa_s, .safe_mode = p->safety_safe_mode,
+        .safe_kpa = p->safety_safe_kpa,
+    };
+}
+
+/* Rules between parameters, checked at ARM (docs/parameters.md). */
+static int check_cross_params(const pma_params_t *p)
+{
+    pma_adc_scaling_t as;
+    pma_dac_scaling_t ds;
+    pma_actuator_config_t ac;
+    pma_app_adc_scaling(p, &as);
+    dac_scaling(p, &ds);
+    actuator_config(p, &ac);
+    int rc = pma_adc_validate_scaling(&as);
+    if (rc == PMA_OK) rc = pma_dac_validate_scaling(&ds);
+    if (rc == PMA_OK) rc = pma_actuator_validate(&ac);
+    if (rc == PMA_OK && !(p->safety_x_min_cm < p->safety_x_max_cm)) rc = PMA_ERR_RANGE;
+    if (rc == PMA_OK && !(p->ctrl_u_min < p->ctrl_u_max)) rc = PMA_ERR_RANGE;
+    return rc;
+}
+
+/* Applies the timing parameters: tick period and, if running, the tick. */
+int pma_app_apply_timing(pma_app_t *app)
+{
+    const uint32_t hz = app->params.sys_tick_hz;
+    app->period_us = (1000000u + hz / 2u) / hz;
+    app->period_s = 1.0f / (float)hz;
+    int rc = pma_hal_tick_start(app->period_us);
+    app->tick_started = (uint8_t)(rc == PMA_OK);
+    return rc;
+}
+
+/* ---------------------------------------------------------------- start-up -- */
+
+static void load_params(pma_app_t *app)
+{
+    pma_params_defaults(&app->params);
+    app->params_default = 1;
+    app->store_ready = 0;
+    if (app->plat.store_blocks_per_slot == 0) return;
+    if (pma_pstore_init(&app->store, app->plat.store_first_block,
+                        app->plat.store_blocks_per_slot) != PMA_OK) {
+        return;
+    }
+    app->store_ready = 1;
+    (void)pma_app_load_params(app);
+}
+
+int pma_app_load_params(pma_app_t *app)
+{
+    if (!app->store_ready) return PMA_ERR_NOT_IMPLEMENTED;
+    uint8_t blob[PMA_PARAMS_BLOB_BYTES];
+    pma_pstore_info_t info;
+    int rc = pma_pstore_load(&app->store, blob, sizeof blob, &info);
+    if (rc != PMA_OK) return rc;
+    if (info.blob_version != PMA_PARAMS_BLOB_VERSION) return PMA_ERR_NO_RECORD;
+    pma_params_t loaded;
+    rc = pma_params_deserialize(&loaded, blob, info.len);
+    if (rc < 0) return rc;
+    app->params = loaded;
+    app->params_default = 0;
+    app->params_changed = 0;
+    return PMA_OK;
+}
+
+int pma_app_init(pma_app_t *app, const pma_app_platform_t *plat)
+{
+    if (app == NULL || plat == NULL) return PMA_ERR_NULL;
+    memset(app, 0, sizeof *app);
+    app->plat = *plat;
+    app->state = PMA_STATE_BOOT;
+    app->sensor_status = PMA_ERR_NOT_READY;
+    app->sample_status = PMA_SAMPLE_NONE;
+    app->reset_cause = (uint8_t)pma_hal_reset_cause();
+    if (plat->watchdog_ms != 0) (void)pma_hal_watchdog_start(plat->watchdog_ms);
+
+    load_params(app);
+    app->node_id = (uint8_t)(plat->node_id >= 0 && plat->node_id <= 15 ? plat->node_id
+                                                                        : (int)app->params.sys_node_id);
+    pma_actuator_config_t ac;
+    actuator_config(&app->params, &ac);
+    app->p_kpa = pma_actuator_safe_kpa(&ac, 0.0f);
+
+    /* this node's ids, and the broadcast emergency stop */
+    const pma_can_filter_t filters[2] = {
+        {.id = app->node_id, .mask = PMA_NODE_ID_MASK},
+        {.id = 0x000u, .mask = PMA_CAN_ID_MAX},
+    };
+    int rc = pma_hal_can_set_filters(filters, 2u);
+    pma_app_send_heartbeat(app); /* the BOOT heartbeat: "I have (re)started" */
+    if (rc == PMA_OK) rc = pma_app_apply_timing(app);
+    app->next_heartbeat_us = pma_hal_time_us() + 1000u * (uint64_t)app->params.sys_heartbeat_ms;
+    if (rc != PMA_OK) {
+        pma_app_raise_fault(app, PMA_FAULT_CONTROLLER);
+        return rc;
+    }
+    app->state = PMA_STATE_IDLE;
+    if (app->reset_cause == PMA_RESET_WATCHDOG) pma_app_raise_fault(app, PMA_FAULT_WATCHDOG_RESET);
+    return PMA_OK;
+}
+
+/* ----------------------------------------------------------------- commands -- */
+
+static int cmd_arm(pma_app_t *app)
+{
+    switch (app->state) {
+    case PMA_STATE_ARMED: return PMA_OK;
+    case PMA_STATE_IDLE: break;
+    case PMA_STATE_FAULT: return PMA_ERR_FAULT;
+    default: return PMA_ERR_STATE;
+    }
+    int rc = check_cross_params(&app->params);
+    if (rc != PMA_OK) return rc;
+    if (app->sensor_status != PMA_OK) {
+        /* never activate the output without a position: no sample yet, or a
+         * sensor fault (its code) */
+        return app->sensor_status == PMA_ERR_NOT_READY ? PMA_ERR_NOT_READY : app->sensor_status;
+    }
+    const pma_params_t *p = &app->params;
+    if (!(app->x_cm >= p->safety_x_min_cm - p->safety_x_margin_cm &&
+          app->x_cm <= p->safety_x_max_cm + p->safety_x_margin_cm)) {
+        return PMA_ERR_RANGE;
+    }
+    app->state = PMA_STATE_ARMED;
+    app->u = 0.0f;
+    return PMA_OK;
+}
+
+static int cmd_start(pma_app_t *app)
+{
+    if (app->state == PMA_STATE_FAULT) return PMA_ERR_FAULT;
+    if (app->state != PMA_STATE_ARMED) return PMA_ERR_STATE;
+    int rc = pma_ctrl_start(&app->ctrl, &app->params, app->period_s);
+    if (rc != PMA_OK) return rc;
+    app->run_ticks = 0;
+    app->ticks_since_host_heartbeat = 0;
+    app->barrier_run = 0;
+    app->telem_count = 0;
+    app->state = PMA_STATE_RUNNING;
+    return PMA_OK;
+}
+
+static int select_param(pma_app_t *app, uint16_t id, uint8_t arg)
+{
+    pma_param_value_t v;
+    v.u32 = arg;
+    int rc = pma_param_set(&app->params, id, PMA_PARAM_U32, v, pma_app_phase(app));
+    if (rc == PMA_OK) app->params_changed = 1;
+    return rc;
+}
+
+int pma_app_command(pma_app_t *app, uint8_t command, uint8_t arg)
+{
+    if (app == NULL) return PMA_ERR_NULL;
+    switch (command) {
+    case PMA_CMD_ARM:
+        return cmd_arm(app);
+    case PMA_CMD_DISARM:
+        if (app->state == PMA_STATE_FAULT) return PMA_ERR_FAULT;
+        if (app->state == PMA_STATE_BOOT) return PMA_ERR_STATE;
+        app->state = PMA_STATE_IDLE;
+        return PMA_OK;
+    case PMA_CMD_START:
+        return cmd_start(app);
+    case PMA_CMD_STOP:
+        if (app->state == PMA_STATE_RUNNING) {
+            app->state = PMA_STATE_ARMED;
+            app->u = 0.0f;
+            return PMA_OK;
+        }
+        return app->state == PMA_STATE_ARMED ? PMA_OK
+               : app->state == PMA_STATE_FAULT ? PMA_ERR_FAULT : PMA_ERR_STATE;
+    case PMA_CMD_ESTOP:
+        pma_app_raise_fault(app, PMA_FAULT_ESTOP);
+        return PMA_OK;
+    case PMA_CMD_CLEAR_FAULTS: {
+        if (app->state != PMA_STATE_FAULT) return PMA_OK;
+        pma_can_status_t cs;
+        if (pma_hal_can_status(&cs) == PMA_OK && cs.state == PMA_CAN_BUS_OFF) return PMA_ERR_BUS_OFF;
+        app->state = PMA_STATE_IDLE;
+        app->fault = PMA_FAULT_NONE;
+        return PMA_OK;
+    }
+    case PMA_CMD_SELECT_CONTROLLER:
+        return select_param(app, PMA_PARAM_CTRL_MODE, arg);
+    case PMA_CMD_SELECT_REFERENCE:
+        return select_param(app, PMA_PARAM_REF_KIND, arg);
+    default:
+        return PMA_ERR_UNKNOWN_COMMAND;
+    }
+}
+
+/* --------------------------------------------------------------------- tick -- */
+
+/* The position of this tick: from the ADC, or the plant bridge's last sample. */
+static void acquire(pma_app_t *app)
+{
+    int rc;
+    if (app->plat.plant_bridge) {
+        if (!app->bridge_have) {
+            app->sample_status = PMA_SAMPLE_NONE;
+            if (app->ticks_since_sample != UINT32_MAX) ++app->ticks_since_sample;
+            app->sensor_status = PMA_ERR_NOT_READY;
+            return;
+        }
+        if (app->bridge_new) {
+            app->sample_status = app->bridge_gap ? PMA_SAMPLE_GAP : PMA_SAMPLE_NEW;
+            app->ticks_since_sample = 0;
+        } else {
+            app->sample_status = PMA_SAMPLE_REPEATED;
+            if (app->ticks_since_sample != UINT32_MAX) ++app->ticks_since_sample;
+        }
+        app->bridge_new = 0;
+        app->bridge_gap = 0;
+        app->raw_counts = app->bridge_raw;
+        rc = PMA_OK;
+    } else {
+        app->ticks_since_sample = 0;
+        rc = pma_hal_adc_read(&app->raw_counts);
+    }
+    if (rc == PMA_OK) {
+        pma_adc_scaling_t s;
+        pma_app_adc_scaling(&app->params, &s);
+        float x = 0.0f;
+        rc = pma_adc_counts_to_cm(&s, app->raw_counts, &x);
+        if (rc == PMA_OK) app->x_cm = x;
+    }
+    app->sensor_status = rc;
+}
+
+static void write_output(pma_app_t *app)
+{
+    pma_actuator_config_t ac;
+    actuator_config(&app->params, &ac);
+    if (output_active(app)) {
+        app->p_kpa = pma_actuator_active_kpa(&ac, app->u, app->p_kpa, app->period_s);
+    } else {
+        app->p_kpa = pma_actuator_safe_kpa(&ac, app->p_kpa);
+    }
+    pma_dac_scaling_t ds;
+    dac_scaling(&app->params, &ds);
+    uint16_t counts = app->dac_counts;
+    if (pma_dac_kpa_to_counts(&ds, app->p_kpa, &counts) == PMA_OK) app->dac_counts = counts;
+    int rc;
+    if (app->plat.plant_bridge) {
+        rc = pma_app_send_actuator(app);
+    } else {
+        rc = pma_hal_dac_write(app->dac_counts);
+    }
+    if (rc != PMA_OK && !app->plat.plant_bridge && output_active(app)) {
+        pma_app_raise_fault(app, PMA_FAULT_OUTPUT);
+        /* the DAC failed: nothing more can be done from here but try the safe value */
+        app->p_kpa = pma_actuator_safe_kpa(&ac, app->p_kpa);
+        if (pma_dac_kpa_to_counts(&ds, app->p_kpa, &counts) == PMA_OK) {
+            app->dac_counts = counts;
+            (void)pma_hal_dac_write(counts);
+        }
+    }
+}
+
+static uint32_t ms_to_ticks(uint32_t ms, uint32_t tick_hz)
+{
+    if (ms == 0) return 0;
+    uint64_t t = ((uint64_t)ms * tick_hz + 999u) / 1000u;
+    return t == 0 ? 1u : (t > UINT32_MAX ? UINT32_MAX : (uint32_t)t);
+}
+
+void pma_app_tick(pma_app_t *app, uint32_t late_ticks)
+{
+    if (app == NULL || app->state == PMA_STATE_BOOT) return;
+    ++app->ticks;
+    app->late_ticks = late_ticks;
+    acquire(app);
+
+    uint8_t ctrl_error = 0;
+    if (app->state == PMA_STATE_RUNNING) {
+        if (app->ticks_since_host_heartbeat != UINT32_MAX) ++app->ticks_since_host_heartbeat;
+        if (app->sensor_status == PMA_OK) {
+            const float t_s = (float)app->run_ticks * app->period_s;
+            float u = 0.0f;
+            ctrl_error = (uint8_t)(pma_ctrl_step(&app->ctrl, t_s, app->x_cm,
+                                                 app->params.ctrl_openloop_u, &u) != PMA_OK);
+            app->u = u;
+            app->barrier_run = app->ctrl.out.barrier ? app->barrier_run + 1u : 0u;
+            ++app->run_ticks;
+        }
+    } else {
+        app->u = 0.0f;
+    }
+
+    pma_can_status_t cs;
+    const uint8_t bus_off = (uint8_t)(pma_hal_can_status(&cs) == PMA_OK && cs.state == PMA_CAN_BUS_OFF);
+    const pma_params_t *p = &app->params;
+    const pma_supervisor_limits_t lim = {
+        .x_min_cm = p->safety_x_min_cm, .x_max_cm = p->safety_x_max_cm,
+        .x_margin_cm = p->safety_x_margin_cm,
+        .sensor_timeout_ticks = p->safety_sensor_timeout_ticks,
+        .max_late_ticks = p->safety_max_late_ticks,
+        .host_timeout_ticks = ms_to_ticks(p->safety_host_timeout_ms, p->sys_tick_hz),
+        .barrier_ticks = p->safety_barrier_ticks,
+    };
+    const pma_supervisor_input_t in = {
+        .output_active = (uint8_t)output_active(app),
+        .running = (uint8_t)(app->state == PMA_STATE_RUNNING),
+        .bus_off = bus_off,
+        .sensor_status = app->sensor_status,
+        .x_cm = app->x_cm,
+        .ticks_since_sample = app->plat.plant_bridge ? app->ticks_since_sample : 0u,
+        .late_ticks = late_ticks,
+        .ticks_since_host_heartbeat = app->ticks_since_host_heartbeat,
+        .controller_error = ctrl_error,
+        .u = app->u,
+        .barrier_run = app->barrier_run,
+    };
+    const pma_fault_t f = pma_supervisor_check(&lim, &in);
+    if (f != PMA_FAULT_NONE) pma_app_raise_fault(app, f); /* safe output below, this tick */
+
+    write_output(app);
+
+    if (app->state == PMA_STATE_RUNNING && p->telem_decimation != 0) {
+        if (++app->telem_count >= p->telem_decimation) {
+            app->telem_count = 0;
+            pma_app_send_telemetry(app);
+        }
+    }
+}
+
+/* ------------------------------------------------------------------ poll -- */
+
+void pma_app_poll(pma_app_t *app)
+{
+    if (app == NULL) return;
+    pma_can_status_t cs;
+    if (pma_hal_can_status(&cs) == PMA_OK && cs.state == PMA_CAN_BUS_OFF) {
+        /* explicit bus-off handling: latch the fault (the output goes safe at
+         * the next tick) and ask the controller to rejoin; CLEAR_FAULTS is
+         * refused until it has */
+        pma_app_raise_fault(app, PMA_FAULT_CAN_BUS_OFF);
+        (void)pma_hal_can_recover();
+    }
+    const uint64_t now = pma_hal_time_us();
+    if (now >= app->next_heartbeat_us) {
+        pma_app_send_heartbeat(app);
+        const uint64_t period = 1000u * (uint64_t)app->params.sys_heartbeat_ms;
+        app->next_heartbeat_us += period;
+        if (app->next_heartbeat_us <= now) app->next_heartbeat_us = now + period;
+    }
+}
+
+int pma_app_step(pma_app_t *app)
+{
+    if (app == NULL) return PMA_ERR_NULL;
+    uint32_t late = 0;
+    const int rc = pma_hal_tick_wait(&late);
+    pma_can_frame_t f;
+    for (unsigned i = 0; i < PMA_APP_RX_PER_STEP && pma_hal_can_recv(&f) == PMA_OK; ++i) {
+        pma_app_handle_frame(app, &f);
+    }
+    if (rc == PMA_OK) pma_app_tick(app, late);
+    pma_app_poll(app);
+    pma_hal_watchdog_kick();
+    return rc == PMA_ERR_EMPTY ? PMA_OK : rc;
+}

@@ -1,0 +1,186 @@
+/* The firmware application: the fixed-rate control loop, the state machine,
+ * the safety supervisor's enforcement, parameters and storage, and the CAN
+ * protocol (firmware/protocol/pma_proto.dbc, docs/protocol.md). Portable: it
+ * calls only the HAL (pma/hal.h); the same code runs on the host port
+ * (pma-fw-host) and on the board.
+ *
+ * State machine (docs/protocol.md has the full table):
+ *
+ *   BOOT --init--> IDLE --ARM--> ARMED --START--> RUNNING
+ *                   ^  <-DISARM-   |   <--STOP---    |
+ *                   |  <---------DISARM---------------
+ *                   +--CLEAR_FAULTS-- FAULT <-- any fault, ESTOP (from any state)
+ *
+ *   BOOT     loading parameters; output safe.       (a watchdog reset boots into
+ *   IDLE     output safe (safety.safe_mode).         FAULT, WATCHDOG_RESET)
+ *   ARMED    output active, u = 0: the preset pressure act.p0_kpa (slew-limited).
+ *   RUNNING  output active: the selected controller tracks the reference.
+ *   FAULT    output safe, the first fault code latched until CLEAR_FAULTS.
+ *
+ * The loop (pma_app_step): wait for the tick, handle every received frame,
+ * run the tick (sensor, controller, supervisor, output, telemetry), then
+ * housekeeping (heartbeat, CAN bus-off), then kick the watchdog. A fault found
+ * in a tick puts the safe output out in that same tick; one raised by a frame
+ * (ESTOP) or by bus-off is applied at the next tick.
+ *
+ * No dynamic allocation, no globals: everything is in pma_app_t. */
+#ifndef PMA_APP_H
+#define PMA_APP_H
+
+#include <stdint.h>
+
+#include "controller.h"
+#include "params.h"
+#include "pma/hal.h"
+#include "pstore.h"
+#include "supervisor.h"
+
+typedef enum pma_app_state {
+    PMA_STATE_BOOT = 0,
+    PMA_STATE_IDLE = 1,
+    PMA_STATE_ARMED = 2,
+    PMA_STATE_RUNNING = 3,
+    PMA_STATE_FAULT = 4,
+} pma_app_state_t;
+
+/* COMMAND frame, Command signal. */
+typedef enum pma_command {
+    PMA_CMD_ARM = 1,
+    PMA_CMD_DISARM = 2,
+    PMA_CMD_START = 3,
+    PMA_CMD_STOP = 4,
+    PMA_CMD_ESTOP = 5,
+    PMA_CMD_CLEAR_FAULTS = 6,
+    PMA_CMD_SELECT_CONTROLLER = 7, /* Arg: ctrl.mode */
+    PMA_CMD_SELECT_REFERENCE = 8,  /* Arg: ref.kind */
+} pma_command_t;
+
+/* PARAM_REQ Op signal. */
+typedef enum pma_param_op {
+    PMA_PARAM_OP_GET = 0,
+    PMA_PARAM_OP_SET = 1,
+    PMA_PARAM_OP_SAVE = 2,
+    PMA_PARAM_OP_RESTORE_DEFAULTS = 3,
+    PMA_PARAM_OP_GET_MIN = 4,
+    PMA_PARAM_OP_GET_MAX = 5,
+    PMA_PARAM_OP_GET_DEFAULT = 6,
+    PMA_PARAM_OP_NEXT_ID = 7,
+    PMA_PARAM_OP_LOAD = 8,
+} pma_param_op_t;
+
+/* HEARTBEAT Flags signal. */
+#define PMA_HB_OUTPUT_ACTIVE   0x0001u
+#define PMA_HB_PLANT_BRIDGE    0x0002u
+#define PMA_HB_LOCKSTEP        0x0004u
+#define PMA_HB_PARAMS_CHANGED  0x0008u /* set since the last load or save */
+#define PMA_HB_PARAMS_DEFAULT  0x0010u /* storage held no record at start-up */
+#define PMA_HB_CAN_PASSIVE     0x0020u
+#define PMA_HB_SENSOR_VALID    0x0040u
+#define PMA_HB_REF_ACTIVE      0x0080u
+#define PMA_HB_SAVE_FAILED     0x0100u /* the last SAVE failed */
+
+/* PLANT_ACTUATOR Sample signal. */
+#define PMA_SAMPLE_NEW      0u
+#define PMA_SAMPLE_REPEATED 1u
+#define PMA_SAMPLE_GAP      2u
+#define PMA_SAMPLE_NONE     3u
+
+/* Node addressing: frame id = base id + node id. */
+#define PMA_NODE_ID_MASK 0x00Fu
+#define PMA_BASE_ID_MASK 0x7F0u
+
+/* Frames handled per loop iteration at most (bounds the loop under a flood;
+ * the rest wait in the RX queue for the next iteration). */
+#define PMA_APP_RX_PER_STEP 64u
+
+typedef struct pma_app_platform {
+    uint8_t plant_bridge;          /* 1: sensor and actuator over CAN frames (host build) */
+    uint8_t lockstep;              /* the port ticks on sensor frames (reported in the heartbeat) */
+    int16_t node_id;               /* 0..15: overrides sys.node_id; -1: use the parameter */
+    uint32_t store_first_block;    /* parameter storage: two slots of */
+    uint32_t store_blocks_per_slot;/* this many NVM blocks; 0: no storage */
+    uint32_t watchdog_ms;          /* 0: watchdog not started */
+} pma_app_platform_t;
+
+typedef struct pma_app_counters {
+    uint32_t frames_rx;            /* frames handled */
+    uint32_t frames_ignored;       /* other nodes' or unknown ids */
+    uint32_t frames_bad;           /* ours, but wrong length or malformed (answered or dropped) */
+    uint32_t tx_failed;            /* frames the HAL did not queue */
+    uint32_t bridge_gaps, bridge_repeats;
+    uint32_t setpoints_rejected;
+} pma_app_counters_t;
+
+typedef struct pma_app {
+    pma_app_platform_t plat;
+    pma_params_t params;
+    uint8_t state;                 /* pma_app_state_t */
+    uint8_t fault;                 /* pma_fault_t, latched */
+    uint8_t node_id;
+    uint8_t reset_cause;
+    /* storage */
+    pma_pstore_t store;
+    uint8_t store_ready, params_changed, params_default, save_failed;
+    /* time */
+    uint32_t period_us;
+    float period_s;
+    uint64_t ticks;                /* since start-up */
+    uint64_t run_ticks;            /* since START */
+    uint32_t ticks_since_host_heartbeat;
+    uint32_t late_ticks;
+    uint64_t next_heartbeat_us;
+    uint8_t heartbeat_counter;
+    uint8_t tick_started;
+    /* sensor */
+    uint16_t raw_counts;
+    int sensor_status;             /* PMA_OK or the conversion's error */
+    float x_cm;
+    /* plant bridge */
+    uint8_t bridge_have, bridge_new, bridge_gap, bridge_seq, sample_status;
+    uint16_t bridge_raw;
+    uint32_t ticks_since_sample;
+    /* control */
+    pma_ctrl_t ctrl;
+    float u;
+    uint32_t barrier_run;
+    uint32_t telem_count;
+    /* output */
+    float p_kpa;
+    uint16_t dac_counts;
+    pma_app_counters_t counters;
+} pma_app_t;
+
+/* Starts the application on an initialised HAL (pma_hal_init() first): BOOT,
+ * loads the parameters (defaults when storage holds none), sets the CAN
+ * filters for the node id, starts the tick and the watchdog, sends a BOOT
+ * heartbeat, and enters IDLE (FAULT WATCHDOG_RESET after a watchdog reset).
+ * Returns PMA_OK or a HAL error from the filters or the tick (the state is
+ * then FAULT); a storage failure is not an error (defaults are used; the
+ * heartbeat shows it). */
+int pma_app_init(pma_app_t *app, const pma_app_platform_t *plat);
+
+/* Handles one received frame (the libFuzzer target). Never fails: bad frames
+ * are answered with an error or dropped per docs/protocol.md. */
+void pma_app_handle_frame(pma_app_t *app, const pma_can_frame_t *frame);
+
+/* Runs one control tick; late_ticks from pma_hal_tick_wait(). */
+void pma_app_tick(pma_app_t *app, uint32_t late_ticks);
+
+/* Housekeeping outside the tick: heartbeat (by pma_hal_time_us), CAN bus-off. */
+void pma_app_poll(pma_app_t *app);
+
+/* One main-loop iteration: tick_wait, frames, tick, poll, watchdog kick.
+ * Returns PMA_OK, or the error of pma_hal_tick_wait() other than
+ * PMA_ERR_EMPTY (e.g. PMA_ERR_NOT_READY). */
+int pma_app_step(pma_app_t *app);
+
+/* A command as if received in a COMMAND frame (no reply sent); returns its
+ * result code. */
+int pma_app_command(pma_app_t *app, uint8_t command, uint8_t arg);
+
+/* Latches a fault (the first one wins) and enters FAULT. */
+void pma_app_raise_fault(pma_app_t *app, pma_fault_t fault);
+
+const char *pma_app_state_name(int state);
+
+#endif /* PMA_APP_H */

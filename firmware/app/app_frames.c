@@ -1,0 +1,330 @@
+/* The CAN side of the application: decoding received frames with the codec
+ * generated from firmware/protocol/pma_proto.dbc, the replies, heartbeat,
+ * telemetry and plant-bridge frames. Rules for bad frames (docs/protocol.md):
+ *
+ *   - another node's id, or an id this node does not receive: ignored;
+ *   - ESTOP / ESTOP_ALL: obeyed whatever the data length (fail safe);
+ *   - COMMAND, PARAM_REQ with the wrong length: answered with PMA_ERR_LENGTH,
+ *     nothing changes;
+ *   - PLANT_SENSOR, SETPOINT, HOST_HEARTBEAT with the wrong length: dropped
+ *     (counted), as if never received;
+ *   - out-of-range or malformed values: answered with the error (COMMAND,
+ *     PARAM_REQ) or dropped (SETPOINT), nothing changes. */
+#include <math.h>
+#include <string.h>
+
+#include "app_internal.h"
+#include "generated/pma_proto.h"
+
+static void send(pma_app_t *app, uint16_t base_id, uint8_t dlc, const uint8_t *data)
+{
+    pma_can_frame_t f;
+    memset(&f, 0, sizeof f);
+    f.id = (uint16_t)(base_id | app->node_id);
+    f.dlc = dlc;
+    memcpy(f.data, data, dlc);
+    if (pma_hal_can_send(&f) != PMA_OK) ++app->counters.tx_failed;
+}
+
+static int8_t result_code(int rc)
+{
+    return (int8_t)(rc < -128 ? -128 : (rc > 0 ? 0 : rc));
+}
+
+/* ------------------------------------------------------------------ replies -- */
+
+static void send_ack(pma_app_t *app, uint8_t command, uint8_t arg, int rc)
+{
+    struct pma_proto_command_ack_t m = {
+        .command = command, .arg = arg, .result = result_code(rc), .state = app->state,
+    };
+    uint8_t d[8] = {0};
+    (void)pma_proto_command_ack_pack(d, &m, sizeof d);
+    send(app, PMA_PROTO_COMMAND_ACK_FRAME_ID, PMA_PROTO_COMMAND_ACK_LENGTH, d);
+}
+
+static void send_param_resp(pma_app_t *app, uint8_t op, uint16_t id, int rc, uint8_t type,
+                            pma_param_value_t v)
+{
+    struct pma_proto_param_resp_t m;
+    memset(&m, 0, sizeof m);
+    m.op = (uint8_t)(op & 0x0Fu);
+    m.type = (uint8_t)(type & 0x0Fu);
+    m.id = id;
+    m.result = result_code(rc);
+    m.value_f32 = v.f32;
+    m.value_u32 = v.u32;
+    m.value_i32 = v.i32;
+    uint8_t d[8] = {0};
+    (void)pma_proto_param_resp_pack(d, &m, sizeof d);
+    send(app, PMA_PROTO_PARAM_RESP_FRAME_ID, PMA_PROTO_PARAM_RESP_LENGTH, d);
+}
+
+void pma_app_send_heartbeat(pma_app_t *app)
+{
+    uint16_t flags = 0;
+    if (app->state == PMA_STATE_ARMED || app->state == PMA_STATE_RUNNING) flags |= PMA_HB_OUTPUT_ACTIVE;
+    if (app->plat.plant_bridge) flags |= PMA_HB_PLANT_BRIDGE;
+    if (app->plat.lockstep) flags |= PMA_HB_LOCKSTEP;
+    if (app->params_changed) flags |= PMA_HB_PARAMS_CHANGED;
+    if (app->params_default) flags |= PMA_HB_PARAMS_DEFAULT;
+    if (app->save_failed) flags |= PMA_HB_SAVE_FAILED;
+    if (app->sensor_status == PMA_OK) flags |= PMA_HB_SENSOR_VALID;
+    if (app->state == PMA_STATE_RUNNING) flags |= PMA_HB_REF_ACTIVE;
+    pma_can_status_t cs;
+    if (pma_hal_can_status(&cs) == PMA_OK && cs.state != PMA_CAN_ERROR_ACTIVE) {
+        flags |= PMA_HB_CAN_PASSIVE;
+    }
+    struct pma_proto_heartbeat_t m = {
+        .state = app->state, .fault_code = app->fault, .flags = flags,
+        .controller = (uint8_t)app->params.ctrl_mode, .reference = (uint8_t)app->params.ref_kind,
+        .reset_cause = app->reset_cause, .counter = app->heartbeat_counter++,
+    };
+    uint8_t d[8] = {0};
+    (void)pma_proto_heartbeat_pack(d, &m, sizeof d);
+    send(app, PMA_PROTO_HEARTBEAT_FRAME_ID, PMA_PROTO_HEARTBEAT_LENGTH, d);
+}
+
+int pma_app_send_actuator(pma_app_t *app)
+{
+    struct pma_proto_plant_actuator_t m = {
+        .seq = app->bridge_seq, .dac_counts = app->dac_counts, .sample = app->sample_status,
+        .output_active = (uint8_t)(app->state == PMA_STATE_ARMED || app->state == PMA_STATE_RUNNING),
+    };
+    uint8_t d[8] = {0};
+    (void)pma_proto_plant_actuator_pack(d, &m, sizeof d);
+    pma_can_frame_t f;
+    memset(&f, 0, sizeof f);
+    f.id = (uint16_t)(PMA_PROTO_PLANT_ACTUATOR_FRAME_ID | app->node_id);
+    f.dlc = PMA_PROTO_PLANT_ACTUATOR_LENGTH;
+    memcpy(f.data, d, f.dlc);
+    const int rc = pma_hal_can_send(&f);
+    if (rc != PMA_OK) ++app->counters.tx_failed;
+    return rc;
+}
+
+void pma_app_send_telemetry(pma_app_t *app)
+{
+    const pma_ctrl_out_t *o = &app->ctrl.out;
+    const uint32_t mask = app->params.telem_mask;
+    uint8_t d[8];
+    if (mask & 0x01u) {
+        const uint64_t ms = (app->run_ticks * app->period_us) / 1000u;
+        struct pma_proto_telem_a_t m = {.time_ms = (uint32_t)ms, .x_cm = app->x_cm};
+        (void)pma_proto_telem_a_pack(d, &m, sizeof d);
+        send(app, PMA_PROTO_TELEM_A_FRAME_ID, PMA_PROTO_TELEM_A_LENGTH, d);
+    }
+    if (mask & 0x02u) {
+        struct pma_proto_telem_b_t m = {.xr_cm = o->xr_cm, .e_cm = o->e_cm};
+        (void)pma_proto_telem_b_pack(d, &m, sizeof d);
+        send(app, PMA_PROTO_TELEM_B_FRAME_ID, PMA_PROTO_TELEM_B_LENGTH, d);
+    }
+    if (mask & 0x04u) {
+        struct pma_proto_telem_c_t m = {.u = app->u, .v_cm_s = o->v_cm_s};
+        (void)pma_proto_telem_c_pack(d, &m, sizeof d);
+        send(app, PMA_PROTO_TELEM_C_FRAME_ID, PMA_PROTO_TELEM_C_LENGTH, d);
+    }
+    if (mask & 0x08u) {
+        struct pma_proto_telem_d_t m = {.internal1 = o->internal1, .internal2 = o->internal2};
+        (void)pma_proto_telem_d_pack(d, &m, sizeof d);
+        send(app, PMA_PROTO_TELEM_D_FRAME_ID, PMA_PROTO_TELEM_D_LENGTH, d);
+    }
+    if (mask & 0x10u) {
+        struct pma_proto_telem_e_t m = {
+            .pressure_kpa = app->p_kpa, .ctrl_flags = (uint16_t)o->flags,
+            .breaches = (uint16_t)(app->ctrl.breaches > 0xFFFFu ? 0xFFFFu : app->ctrl.breaches),
+        };
+        (void)pma_proto_telem_e_pack(d, &m, sizeof d);
+        send(app, PMA_PROTO_TELEM_E_FRAME_ID, PMA_PROTO_TELEM_E_LENGTH, d);
+    }
+}
+
+/* ---------------------------------------------------------------- handlers -- */
+
+static void on_plant_sensor(pma_app_t *app, const pma_can_frame_t *f)
+{
+    struct pma_proto_plant_sensor_t m;
+    if (!app->plat.plant_bridge || f->dlc != PMA_PROTO_PLANT_SENSOR_LENGTH ||
+        pma_proto_plant_sensor_unpack(&m, f->data, f->dlc) != 0) {
+        ++app->counters.frames_bad;
+        return;
+    }
+    if (app->bridge_have && m.seq == app->bridge_seq) {
+        ++app->counters.bridge_repeats; /* a duplicated frame: not a new sample */
+        return;
+    }
+    if (app->bridge_have && m.seq != (uint8_t)(app->bridge_seq + 1u)) {
+        ++app->counters.bridge_gaps;
+        app->bridge_gap = 1;
+    }
+    app->bridge_have = 1;
+    app->bridge_new = 1;
+    app->bridge_seq = m.seq;
+    app->bridge_raw = m.raw_counts;
+}
+
+static void on_command(pma_app_t *app, const pma_can_frame_t *f)
+{
+    const uint8_t cmd = f->dlc > 0 ? f->data[0] : 0u;
+    const uint8_t arg = f->dlc > 1 ? f->data[1] : 0u;
+    if (f->dlc != PMA_PROTO_COMMAND_LENGTH) {
+        ++app->counters.frames_bad;
+        send_ack(app, cmd, arg, PMA_ERR_LENGTH);
+        return;
+    }
+    send_ack(app, cmd, arg, pma_app_command(app, cmd, arg));
+}
+
+static void on_setpoint(pma_app_t *app, const pma_can_frame_t *f)
+{
+    struct pma_proto_setpoint_t m;
+    if (f->dlc != PMA_PROTO_SETPOINT_LENGTH || pma_proto_setpoint_unpack(&m, f->data, f->dlc) != 0) {
+        ++app->counters.frames_bad;
+        return;
+    }
+    if (app->state != PMA_STATE_RUNNING ||
+        pma_ctrl_stream(&app->ctrl, m.xr_cm, app->params.safety_x_min_cm,
+                        app->params.safety_x_max_cm) != PMA_OK) {
+        ++app->counters.setpoints_rejected;
+    }
+}
+
+static int whole_set_op(pma_app_t *app, uint8_t op)
+{
+    if (pma_app_phase(app) != PMA_PHASE_INACTIVE) return PMA_ERR_STATE;
+    switch (op) {
+    case PMA_PARAM_OP_SAVE: {
+        if (!app->store_ready) return PMA_ERR_NOT_IMPLEMENTED;
+        uint8_t blob[PMA_PARAMS_BLOB_BYTES];
+        const size_t n = pma_params_serialize(&app->params, blob, sizeof blob);
+        const int rc = pma_pstore_save(&app->store, blob, n, PMA_PARAMS_BLOB_VERSION);
+        app->save_failed = (uint8_t)(rc != PMA_OK);
+        if (rc == PMA_OK) app->params_changed = 0;
+        return rc;
+    }
+    case PMA_PARAM_OP_RESTORE_DEFAULTS:
+        pma_params_defaults(&app->params);
+        app->params_changed = 1;
+        return pma_app_apply_timing(app);
+    default: { /* LOAD */
+        const int rc = pma_app_load_params(app);
+        if (rc != PMA_OK) return rc;
+        return pma_app_apply_timing(app);
+    }
+    }
+}
+
+static void on_param_req(pma_app_t *app, const pma_can_frame_t *f)
+{
+    const pma_param_value_t zero = {.u32 = 0};
+    const uint8_t op = f->dlc > 0 ? (uint8_t)(f->data[0] & 0x0Fu) : 0u;
+    const uint8_t req_type = f->dlc > 0 ? (uint8_t)(f->data[0] >> 4) : 0u;
+    const uint16_t id = f->dlc > 2 ? (uint16_t)(f->data[1] | (f->data[2] << 8)) : 0u;
+    struct pma_proto_param_req_t m;
+    if (f->dlc != PMA_PROTO_PARAM_REQ_LENGTH || pma_proto_param_req_unpack(&m, f->data, f->dlc) != 0) {
+        ++app->counters.frames_bad;
+        send_param_resp(app, op, id, PMA_ERR_LENGTH, req_type, zero);
+        return;
+    }
+    if (m.reserved != 0) {
+        send_param_resp(app, op, id, PMA_ERR_UNKNOWN_COMMAND, req_type, zero);
+        return;
+    }
+    const pma_param_desc_t *d = pma_param_find(id);
+    pma_param_type_t type = d ? (pma_param_type_t)d->type : (pma_param_type_t)req_type;
+    pma_param_value_t v = zero;
+    int rc = PMA_OK;
+    switch (op) {
+    case PMA_PARAM_OP_GET:
+        rc = pma_param_get(&app->params, id, &type, &v);
+        break;
+    case PMA_PARAM_OP_SET: {
+        if (req_type > PMA_PARAM_I32) {
+            rc = PMA_ERR_TYPE;
+        } else {
+            pma_param_value_t nv;
+            nv.u32 = m.value_u32; /* the raw bits: the codec unpacks only the Type's signal */
+            if (req_type == PMA_PARAM_F32) nv.f32 = m.value_f32;
+            if (req_type == PMA_PARAM_I32) nv.i32 = m.value_i32;
+            rc = pma_param_set(&app->params, id, (pma_param_type_t)req_type, nv, pma_app_phase(app));
+            if (rc == PMA_OK) {
+                app->params_changed = 1;
+                if (id == PMA_PARAM_SYS_TICK_HZ) rc = pma_app_apply_timing(app);
+            }
+        }
+        if (d != NULL) (void)pma_param_get(&app->params, id, &type, &v); /* the value now */
+        break;
+    }
+    case PMA_PARAM_OP_SAVE:
+    case PMA_PARAM_OP_RESTORE_DEFAULTS:
+    case PMA_PARAM_OP_LOAD:
+        rc = whole_set_op(app, op);
+        type = (pma_param_type_t)req_type;
+        break;
+    case PMA_PARAM_OP_GET_MIN:
+    case PMA_PARAM_OP_GET_MAX:
+    case PMA_PARAM_OP_GET_DEFAULT:
+        if (d == NULL) {
+            rc = PMA_ERR_UNKNOWN_ID;
+        } else {
+            v = op == PMA_PARAM_OP_GET_MIN ? d->min : (op == PMA_PARAM_OP_GET_MAX ? d->max : d->def);
+        }
+        break;
+    case PMA_PARAM_OP_NEXT_ID: {
+        uint16_t next = 0;
+        rc = pma_param_next_id(id, &next);
+        type = PMA_PARAM_U32;
+        v.u32 = next;
+        break;
+    }
+    default:
+        rc = PMA_ERR_UNKNOWN_COMMAND;
+        break;
+    }
+    send_param_resp(app, op, id, rc, (uint8_t)type, v);
+}
+
+void pma_app_handle_frame(pma_app_t *app, const pma_can_frame_t *f)
+{
+    if (app == NULL || f == NULL) return;
+    ++app->counters.frames_rx;
+    if (f->dlc > PMA_CAN_DLC_MAX || f->id > PMA_CAN_ID_MAX) {
+        ++app->counters.frames_bad;
+        return;
+    }
+    if (f->id == PMA_PROTO_ESTOP_ALL_FRAME_ID) {
+        pma_app_raise_fault(app, PMA_FAULT_ESTOP);
+        return;
+    }
+    if ((f->id & PMA_NODE_ID_MASK) != app->node_id) {
+        ++app->counters.frames_ignored;
+        return;
+    }
+    switch (f->id & PMA_BASE_ID_MASK) {
+    case PMA_PROTO_ESTOP_FRAME_ID:
+        pma_app_raise_fault(app, PMA_FAULT_ESTOP);
+        break;
+    case PMA_PROTO_PLANT_SENSOR_FRAME_ID:
+        on_plant_sensor(app, f);
+        break;
+    case PMA_PROTO_COMMAND_FRAME_ID:
+        on_command(app, f);
+        break;
+    case PMA_PROTO_SETPOINT_FRAME_ID:
+        on_setpoint(app, f);
+        break;
+    case PMA_PROTO_PARAM_REQ_FRAME_ID:
+        on_param_req(app, f);
+        break;
+    case PMA_PROTO_HOST_HEARTBEAT_FRAME_ID:
+        if (f->dlc == PMA_PROTO_HOST_HEARTBEAT_LENGTH) {
+            app->ticks_since_host_heartbeat = 0;
+        } else {
+            ++app->counters.frames_bad;
+        }
+        break;
+    default: /* what this node sends, or not defined */
+        ++app->counters.frames_ignored;
+        break;
+    }
+}

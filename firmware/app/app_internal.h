@@ -1,0 +1,16 @@
+/* Shared between app.c and app_frames.c; not part of the application's API. */
+#ifndef PMA_APP_INTERNAL_H
+#define PMA_APP_INTERNAL_H
+
+#include "app.h"
+
+pma_param_phase_t pma_app_phase(const pma_app_t *app);
+void pma_app_adc_scaling(const pma_params_t *p, pma_adc_scaling_t *s);
+int pma_app_apply_timing(pma_app_t *app);
+int pma_app_load_params(pma_app_t *app);
+
+void pma_app_send_heartbeat(pma_app_t *app);
+void pma_app_send_telemetry(pma_app_t *app);
+int pma_app_send_actuator(pma_app_t *app);
+
+#endif /* PMA_APP_INTERNAL_H */

@@ -1,0 +1,56 @@
+/* The application's controller slot: the reference, the velocity estimator and
+ * the selected controller (ctrl.mode), built from the parameters at START and
+ * stepped once per tick while RUNNING. Float variants (the board is a
+ * Cortex-M4F). Pure: no HAL, no globals. */
+#ifndef PMA_CONTROLLER_H
+#define PMA_CONTROLLER_H
+
+#include <stdint.h>
+
+#include "params.h"
+#include "pma/mfac.h"
+#include "pma/pid.h"
+#include "pma/ppc.h"
+#include "pma/ref.h"
+#include "pma/velest.h"
+
+typedef struct pma_ctrl_out {
+    float t_s;              /* control time since START */
+    float xr_cm, e_cm;      /* reference and e = x - xr */
+    float v_cm_s;           /* velocity estimate */
+    float u;                /* output, within ctrl.u_min..u_max [input unit] */
+    float internal1, internal2; /* TELEM_D: PPC lambda1 [cm], lambda2 [cm/s]; MFAC phi, u(k-1); PID I, D */
+    uint32_t flags;         /* the controller's PMA_*_FLAG_* of this step */
+    uint8_t barrier;        /* PPC: a barrier clamp this step */
+} pma_ctrl_out_t;
+
+typedef struct pma_ctrl {
+    uint8_t mode;           /* PMA_CTRL_MODE_* */
+    float period_s, u_min, u_max;
+    pma_ref_f32_t ref;
+    pma_ref_config_t ref_cfg;
+    pma_velest_f32_t vel;
+    union {
+        pma_ppc_f32_t ppc;
+        pma_mfac_f32_t mfac;
+        pma_pid_f32_t pid;
+    } c;
+    uint32_t breaches;      /* steps with a barrier clamp since START */
+    pma_ctrl_out_t out;
+} pma_ctrl_t;
+
+/* Builds and validates everything from p for control period period_s; checks
+ * the reference against the constraint band (safety.x_min/x_max_cm; with
+ * margin ppc.w1_cm for PPC when ppc.band_check) over ref.horizon_s.
+ * PMA_OK or the first validation error (PMA_ERR_RANGE, PMA_ERR_BAND, ...). */
+int pma_ctrl_start(pma_ctrl_t *s, const pma_params_t *p, float period_s);
+
+/* One step at control time t_s with position x_cm; openloop_u is the live
+ * ctrl.openloop_u. *u receives the output (0 on error). */
+int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float *u);
+
+/* STREAM reference: a new target, accepted when finite and strictly inside
+ * the constraint band [x_min, x_max]; PMA_ERR_UNSUPPORTED for other kinds. */
+int pma_ctrl_stream(pma_ctrl_t *s, float target_cm, float x_min_cm, float x_max_cm);
+
+#endif /* PMA_CONTROLLER_H */

@@ -1,0 +1,64 @@
+/* The safety supervisor: a pure function from what the loop observed in one
+ * tick to a fault code, independent of the controllers (it reads their output
+ * and flags, never their state). The application latches the first fault,
+ * applies the safe output in the same tick, and keeps it until CLEAR_FAULTS.
+ *
+ * Checked while the output is active (ARMED, RUNNING), in this order (the
+ * first that holds is reported): sensor wire break, sensor read error, sensor
+ * out of range, no new sensor sample (plant bridge), position beyond the
+ * constraints by more than the margin, tick overrun; and while RUNNING: host
+ * heartbeat lost, non-finite controller output, barrier clamped for too many
+ * consecutive ticks. CAN bus-off is checked in every state. */
+#ifndef PMA_SUPERVISOR_H
+#define PMA_SUPERVISOR_H
+
+#include <stdint.h>
+
+/* Fault codes: the HEARTBEAT FaultCode register (firmware/protocol/pma_proto.dbc). */
+typedef enum pma_fault {
+    PMA_FAULT_NONE = 0,
+    PMA_FAULT_ESTOP = 1,               /* ESTOP or ESTOP_ALL received, or the ESTOP command */
+    PMA_FAULT_POSITION_LIMIT = 2,      /* x outside [x_min - margin, x_max + margin] */
+    PMA_FAULT_SENSOR_RANGE = 3,        /* sample outside the valid counts */
+    PMA_FAULT_SENSOR_WIRE_BREAK = 4,   /* sample below the wire-break level */
+    PMA_FAULT_SENSOR_READ = 5,         /* the ADC failed */
+    PMA_FAULT_SENSOR_TIMEOUT = 6,      /* plant bridge: no new sample for too long */
+    PMA_FAULT_BARRIER = 7,             /* PPC barrier clamped for too many consecutive ticks */
+    PMA_FAULT_NOT_FINITE = 8,          /* NaN or infinity in the controller output */
+    PMA_FAULT_TICK_OVERRUN = 9,        /* a tick served too late */
+    PMA_FAULT_HOST_HEARTBEAT_LOST = 10,/* no HOST_HEARTBEAT while RUNNING for too long */
+    PMA_FAULT_CAN_BUS_OFF = 11,        /* the CAN controller went bus-off */
+    PMA_FAULT_CONTROLLER = 12,         /* a controller step returned an error */
+    PMA_FAULT_WATCHDOG_RESET = 13,     /* the program was restarted by the watchdog */
+    PMA_FAULT_OUTPUT = 14,             /* the DAC or the actuator frame could not be written */
+} pma_fault_t;
+
+typedef struct pma_supervisor_limits {
+    float x_min_cm, x_max_cm, x_margin_cm;
+    uint32_t sensor_timeout_ticks;     /* >= 1 */
+    uint32_t max_late_ticks;
+    uint32_t host_timeout_ticks;       /* 0: disabled */
+    uint32_t barrier_ticks;            /* 0: disabled */
+} pma_supervisor_limits_t;
+
+typedef struct pma_supervisor_input {
+    uint8_t output_active;             /* ARMED or RUNNING */
+    uint8_t running;
+    uint8_t bus_off;
+    int sensor_status;                 /* PMA_OK or the error of the sample's conversion */
+    float x_cm;                        /* meaningful when sensor_status is PMA_OK */
+    uint32_t ticks_since_sample;       /* plant bridge; 0 when sampling the ADC */
+    uint32_t late_ticks;               /* from pma_hal_tick_wait() */
+    uint32_t ticks_since_host_heartbeat;
+    uint8_t controller_error;          /* the step returned an error */
+    float u;                           /* controller output (RUNNING) */
+    uint32_t barrier_run;              /* consecutive ticks with a barrier clamp */
+} pma_supervisor_input_t;
+
+pma_fault_t pma_supervisor_check(const pma_supervisor_limits_t *lim,
+                                 const pma_supervisor_input_t *in);
+
+/* Short name of a fault code, e.g. "SENSOR_WIRE_BREAK" (never NULL). */
+const char *pma_fault_name(int fault);
+
+#endif /* PMA_SUPERVISOR_H */
