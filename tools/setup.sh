@@ -16,6 +16,7 @@ PACKAGES=(
   qemu-system-arm                                    # Cortex-M tests and benchmarks
   python3 python3-venv python3-pip                   # golden reference, reports
   user-mode-linux kmod iproute2 can-utils            # hil/with-vcan (vcan where the kernel has none)
+  clang-14 libclang-rt-14-dev                        # libFuzzer target of the CAN frame handler
 )
 
 SUDO=""
