@@ -22,7 +22,7 @@ from pmactl import PmaNode, load_protocol
 from pmactl.protocol import Protocol
 
 ROOT = Path(__file__).resolve().parents[2]
-FW_HOST = Path(os.environ.get("PMA_FW_HOST", ROOT / "build/host/firmware/targets/host/pma-fw-host"))
+FW_HOST = Path(os.environ.get("PMA_FW_HOST", ROOT / "build/host-ubsan/firmware/targets/host/pma-fw-host"))
 CHANNEL = os.environ.get("PMA_CAN_CHANNEL", "vcan0")
 SANITIZER_MARKERS = ("runtime error:", "AddressSanitizer", "LeakSanitizer", "UndefinedBehaviorSanitizer")
 
@@ -33,7 +33,7 @@ def pytest_configure(config: pytest.Config) -> None:
             f"no CAN interface {CHANNEL}: run these tests through hil/with-vcan "
             f"(hil/with-vcan .venv/bin/python -m pytest tests/integration)")
     if not FW_HOST.exists():
-        raise pytest.UsageError(f"{FW_HOST} not built: cmake --preset host && cmake --build --preset host")
+        raise pytest.UsageError(f"{FW_HOST} not built: cmake --preset host-ubsan && cmake --build --preset host-ubsan")
 
 
 @pytest.fixture(scope="session")

@@ -1,0 +1,386 @@
+/* Linux port without a CAN interface (runs on any host, under ASan): the
+ * init rules and errors with their messages, the devices this port does not
+ * have, and the pure parts of CAN: the RX ring and the decoding of SocketCAN
+ * error frames (the vcan test, test_hal_linux_can.c, runs without ASan). */
+#define _GNU_SOURCE
+
+#include "test_hal_linux.h"
+
+#include <fcntl.h>
+#include <linux/can.h>
+#include <linux/can/error.h>
+#include <sys/file.h>
+
+#include "linux_internal.h"
+
+static char dir[256];
+
+static int setup(void **state)
+{
+    (void)state;
+    linux_test_mkdtemp(dir, sizeof dir);
+    return 0;
+}
+
+static int teardown(void **state)
+{
+    (void)state;
+    pma_hal_deinit();
+    linux_test_rmdir(dir);
+    return 0;
+}
+
+static pma_hal_linux_config_t no_can_config(void)
+{
+    pma_hal_linux_config_t c = PMA_HAL_LINUX_CONFIG_INIT;
+    c.no_can = 1;
+    return c;
+}
+
+static int init_with(const pma_hal_linux_config_t *c)
+{
+    const pma_hal_config_t cfg = {.can_bitrate_bps = 0, .port = c};
+    return pma_hal_init(&cfg);
+}
+
+/* Every device function before init (and after deinit). */
+static void check_not_ready(void)
+{
+    pma_can_frame_t f = {.id = 1, .dlc = 0, .data = {0}};
+    pma_can_status_t st;
+    pma_nvm_geometry_t g;
+    uint8_t b[8] = {0};
+    uint16_t raw;
+    uint32_t late;
+    assert_status(pma_hal_can_send(&f), PMA_ERR_NOT_READY);
+    assert_status(pma_hal_can_recv(&f), PMA_ERR_NOT_READY);
+    assert_status(pma_hal_can_set_filters(NULL, 0), PMA_ERR_NOT_READY);
+    assert_status(pma_hal_can_status(&st), PMA_ERR_NOT_READY);
+    assert_status(pma_hal_can_recover(), PMA_ERR_NOT_READY);
+    assert_status(pma_hal_tick_start(1000), PMA_ERR_NOT_READY);
+    assert_status(pma_hal_tick_wait(&late), PMA_ERR_NOT_READY);
+    assert_status(pma_hal_nvm_geometry(&g), PMA_ERR_NOT_READY);
+    assert_status(pma_hal_nvm_read(0, 0, b, 8), PMA_ERR_NOT_READY);
+    assert_status(pma_hal_nvm_program(0, 0, b, 8), PMA_ERR_NOT_READY);
+    assert_status(pma_hal_nvm_erase(0), PMA_ERR_NOT_READY);
+    assert_status(pma_hal_adc_read(&raw), PMA_ERR_NOT_READY);
+    assert_status(pma_hal_dac_write(0), PMA_ERR_NOT_READY);
+}
+
+static void test_not_ready_and_name(void **state)
+{
+    (void)state;
+    assert_string_equal(pma_hal_port_name(), "linux");
+    check_not_ready();
+    assert_true(pma_hal_time_us() > 0); /* the clock works before init */
+    pma_hal_watchdog_kick();            /* not started: does nothing */
+    assert_status(pma_hal_watchdog_start(0), PMA_ERR_RANGE);
+    assert_status(pma_hal_watchdog_start(PMA_HAL_LINUX_WATCHDOG_MAX_MS + 1u), PMA_ERR_RANGE);
+}
+
+static void test_no_can_devices(void **state)
+{
+    (void)state;
+    const pma_hal_linux_config_t c = no_can_config();
+    assert_status(init_with(&c), PMA_OK);
+    assert_string_equal(pma_hal_linux_last_error(), "");
+    pma_can_frame_t f = {.id = 1, .dlc = 0, .data = {0}};
+    pma_can_status_t st;
+    assert_status(pma_hal_can_send(&f), PMA_ERR_NOT_IMPLEMENTED);
+    assert_status(pma_hal_can_recv(&f), PMA_ERR_NOT_IMPLEMENTED);
+    assert_status(pma_hal_can_set_filters(NULL, 0), PMA_ERR_NOT_IMPLEMENTED);
+    assert_status(pma_hal_can_status(&st), PMA_ERR_NOT_IMPLEMENTED);
+    assert_status(pma_hal_can_recover(), PMA_ERR_NOT_IMPLEMENTED);
+    /* no converters on a host: bridged over CAN */
+    uint16_t raw;
+    assert_status(pma_hal_adc_read(&raw), PMA_ERR_NOT_IMPLEMENTED);
+    assert_status(pma_hal_adc_read(NULL), PMA_ERR_NULL);
+    assert_status(pma_hal_dac_write(100), PMA_ERR_NOT_IMPLEMENTED);
+    /* no storage_path: no NVM */
+    pma_nvm_geometry_t g;
+    uint8_t b[8] = {0};
+    assert_status(pma_hal_nvm_geometry(&g), PMA_ERR_NOT_IMPLEMENTED);
+    assert_status(pma_hal_nvm_read(0, 0, b, 8), PMA_ERR_NOT_IMPLEMENTED);
+    assert_status(pma_hal_nvm_program(0, 0, b, 8), PMA_ERR_NOT_IMPLEMENTED);
+    assert_status(pma_hal_nvm_erase(0), PMA_ERR_NOT_IMPLEMENTED);
+    pma_hal_deinit();
+    check_not_ready();
+}
+
+/* A missing interface: on a kernel without SocketCAN (this project's build
+ * machines) socket(PF_CAN) itself fails; with SocketCAN the name is unknown.
+ * Either way the message names the interface and the reason. */
+static void test_missing_interface(void **state)
+{
+    (void)state;
+    pma_hal_linux_config_t c = PMA_HAL_LINUX_CONFIG_INIT;
+    c.can_ifname = "vcan7";
+    assert_status(init_with(&c), PMA_ERR_IO);
+    const char *msg = pma_hal_linux_last_error();
+    print_message("message: %s\n", msg);
+    assert_contains(msg, "CAN interface vcan7: ");
+    if (strstr(msg, "No such device") == NULL) {
+        assert_contains(msg, "Address family not supported by protocol");
+        assert_contains(msg, "no SocketCAN");
+    }
+    check_not_ready(); /* a failed init leaves the port uninitialised */
+}
+
+/* pma_hal_init(NULL): the defaults, i.e. CAN on vcan0 (and nothing else). */
+static void test_null_config_is_vcan0(void **state)
+{
+    (void)state;
+    const int rc = pma_hal_init(NULL);
+    if (rc == PMA_OK) { /* a host with SocketCAN and a vcan0 */
+        assert_string_equal(pma_hal_linux_last_error(), "");
+        return;
+    }
+    assert_status(rc, PMA_ERR_IO);
+    assert_contains(pma_hal_linux_last_error(), "CAN interface vcan0: ");
+}
+
+static void test_config_errors(void **state)
+{
+    (void)state;
+    pma_hal_linux_config_t c = PMA_HAL_LINUX_CONFIG_INIT;
+    c.can_ifname = NULL;
+    assert_status(init_with(&c), PMA_ERR_NULL);
+    assert_contains(pma_hal_linux_last_error(), "can_ifname");
+    c.can_ifname = "a_name_too_long_for_linux";
+    assert_status(init_with(&c), PMA_ERR_RANGE);
+    assert_contains(pma_hal_linux_last_error(), "a_name_too_long_for_linux");
+    c.can_ifname = "";
+    assert_status(init_with(&c), PMA_ERR_RANGE);
+
+    c = no_can_config();
+    c.lockstep = 1;
+    assert_status(init_with(&c), PMA_ERR_RANGE);
+    assert_contains(pma_hal_linux_last_error(), "lockstep");
+    c = no_can_config();
+    c.tick_can_mask = 0x800;
+    assert_status(init_with(&c), PMA_ERR_RANGE);
+
+    char path[300];
+    (void)snprintf(path, sizeof path, "%s/nvm.bin", dir);
+    c = no_can_config();
+    c.storage_path = path;
+    c.nvm_block_size = 12; /* not a multiple of the program size */
+    assert_status(init_with(&c), PMA_ERR_RANGE);
+    assert_contains(pma_hal_linux_last_error(), "multiple of 8");
+    c.nvm_block_size = 1u << 20;
+    c.nvm_block_count = 65; /* above the 64 MiB limit */
+    assert_status(init_with(&c), PMA_ERR_RANGE);
+    c = no_can_config();
+    c.storage_path = path;
+    c.nvm_cut_permille = 1001;
+    assert_status(init_with(&c), PMA_ERR_RANGE);
+    c.nvm_cut_permille = 0;
+    c.nvm_cut_after_ops = -2;
+    assert_status(init_with(&c), PMA_ERR_RANGE);
+    assert_int_equal(access(path, F_OK), -1); /* nothing was created */
+    check_not_ready();
+}
+
+static void test_storage_errors(void **state)
+{
+    (void)state;
+    char path[300];
+    pma_hal_linux_config_t c = no_can_config();
+    c.storage_path = path;
+
+    (void)snprintf(path, sizeof path, "%s/no/such/dir/nvm.bin", dir);
+    assert_status(init_with(&c), PMA_ERR_IO);
+    assert_contains(pma_hal_linux_last_error(), path);
+    assert_contains(pma_hal_linux_last_error(), "No such file or directory");
+
+    (void)snprintf(path, sizeof path, "%s", dir); /* a directory */
+    assert_status(init_with(&c), PMA_ERR_IO);
+    assert_contains(pma_hal_linux_last_error(), "storage file");
+
+    /* another process (here: another open file description) holds it */
+    (void)snprintf(path, sizeof path, "%s/nvm.bin", dir);
+    assert_status(init_with(&c), PMA_OK); /* creates it */
+    pma_hal_deinit();
+    const int fd = open(path, O_RDWR | O_CLOEXEC);
+    assert_true(fd >= 0);
+    assert_int_equal(flock(fd, LOCK_EX | LOCK_NB), 0);
+    assert_status(init_with(&c), PMA_ERR_IO);
+    assert_contains(pma_hal_linux_last_error(), "in use by another process");
+    (void)close(fd);
+    assert_status(init_with(&c), PMA_OK);
+}
+
+/* Re-initialising keeps working and a failed re-init leaves nothing open. */
+static void test_reinit(void **state)
+{
+    (void)state;
+    pma_hal_linux_config_t c = no_can_config();
+    assert_status(init_with(&c), PMA_OK);
+    assert_status(pma_hal_tick_start(1000), PMA_OK);
+    assert_status(init_with(&c), PMA_OK); /* again: the tick is stopped */
+    assert_status(pma_hal_tick_wait(NULL), PMA_ERR_NOT_READY);
+    c.nvm_block_size = 3;
+    c.storage_path = "unused";
+    assert_status(init_with(&c), PMA_ERR_RANGE);
+    check_not_ready();
+}
+
+/* ------------------------------------------------------------ RX ring -- */
+
+static void test_ring_order_and_capacity(void **state)
+{
+    (void)state;
+    static pma_linux_ring_t r;
+    pma_linux_ring_clear(&r);
+    pma_can_frame_t f = {.id = 0, .dlc = 2, .data = {0}};
+    /* wraps around several times, in order */
+    uint32_t next_in = 0, next_out = 0;
+    for (int round = 0; round < 5; ++round) {
+        while (true) {
+            f.id = (uint16_t)(next_in & 0x7FFu);
+            f.data[0] = (uint8_t)next_in;
+            if (!pma_linux_ring_push(&r, &f)) break;
+            next_in++;
+        }
+        assert_int_equal(r.count, PMA_HAL_LINUX_CAN_RX_DEPTH);
+        for (uint32_t i = 0; i < PMA_HAL_LINUX_CAN_RX_DEPTH / 2u + (uint32_t)round; ++i) {
+            pma_can_frame_t out;
+            assert_true(pma_linux_ring_pop(&r, &out));
+            assert_int_equal(out.id, next_out & 0x7FFu);
+            assert_int_equal(out.data[0], (uint8_t)next_out);
+            next_out++;
+        }
+    }
+    pma_can_frame_t out;
+    while (pma_linux_ring_pop(&r, &out)) {
+        assert_int_equal(out.id, next_out & 0x7FFu);
+        next_out++;
+    }
+    assert_int_equal(next_out, next_in);
+    assert_false(pma_linux_ring_pop(&r, &out));
+}
+
+/* ------------------------------------------------------- error frames -- */
+
+static void apply(pma_linux_can_err_t *e, uint32_t id, uint8_t d1, uint8_t tec, uint8_t rec)
+{
+    const uint8_t data[8] = {0, d1, 0, 0, 0, 0, tec, rec};
+    pma_linux_can_err_apply(e, id, data);
+}
+
+static void test_error_frames_counters(void **state)
+{
+    (void)state;
+    pma_linux_can_err_t e;
+    pma_linux_can_err_reset(&e);
+    assert_int_equal(pma_linux_can_err_state(&e), PMA_CAN_ERROR_ACTIVE);
+
+    /* a data frame is no error report */
+    apply(&e, 0x123, CAN_ERR_CRTL_TX_PASSIVE, 200, 0);
+    assert_int_equal(pma_linux_can_err_state(&e), PMA_CAN_ERROR_ACTIVE);
+
+    /* counters given by CAN_ERR_CNT */
+    apply(&e, CAN_ERR_FLAG | CAN_ERR_CRTL | CAN_ERR_CNT, CAN_ERR_CRTL_TX_PASSIVE, 130, 5);
+    assert_int_equal(e.tec, 130);
+    assert_int_equal(e.rec, 5);
+    assert_int_equal(pma_linux_can_err_state(&e), PMA_CAN_ERROR_PASSIVE);
+    apply(&e, CAN_ERR_FLAG | CAN_ERR_CRTL | CAN_ERR_CNT, CAN_ERR_CRTL_ACTIVE, 20, 3);
+    assert_int_equal(e.tec, 20);
+    assert_int_equal(pma_linux_can_err_state(&e), PMA_CAN_ERROR_ACTIVE);
+
+    /* without counters: the state's nearest value */
+    pma_linux_can_err_reset(&e);
+    apply(&e, CAN_ERR_FLAG | CAN_ERR_CRTL, CAN_ERR_CRTL_RX_WARNING, 0, 0);
+    assert_int_equal(e.rec, 96);
+    assert_int_equal(pma_linux_can_err_state(&e), PMA_CAN_ERROR_ACTIVE); /* warning is active */
+    apply(&e, CAN_ERR_FLAG | CAN_ERR_CRTL, CAN_ERR_CRTL_RX_PASSIVE, 0, 0);
+    assert_int_equal(e.rec, 128);
+    assert_int_equal(pma_linux_can_err_state(&e), PMA_CAN_ERROR_PASSIVE);
+    apply(&e, CAN_ERR_FLAG | CAN_ERR_CRTL, CAN_ERR_CRTL_TX_PASSIVE | CAN_ERR_CRTL_RX_WARNING, 0, 0);
+    assert_int_equal(e.tec, 128);
+    assert_int_equal(e.rec, 127); /* down from passive to warning */
+    apply(&e, CAN_ERR_FLAG | CAN_ERR_CRTL, CAN_ERR_CRTL_TX_WARNING, 0, 0);
+    assert_int_equal(e.tec, 127);
+    assert_int_equal(pma_linux_can_err_state(&e), PMA_CAN_ERROR_ACTIVE);
+    apply(&e, CAN_ERR_FLAG | CAN_ERR_CRTL, CAN_ERR_CRTL_ACTIVE, 0, 0);
+    assert_int_equal(e.tec, 95);
+    assert_int_equal(e.rec, 95);
+    assert_int_equal(pma_linux_can_err_state(&e), PMA_CAN_ERROR_ACTIVE);
+
+    /* controller RX overflow: frames lost before the socket */
+    apply(&e, CAN_ERR_FLAG | CAN_ERR_CRTL, CAN_ERR_CRTL_RX_OVERFLOW, 0, 0);
+    apply(&e, CAN_ERR_FLAG | CAN_ERR_CRTL, CAN_ERR_CRTL_RX_OVERFLOW, 0, 0);
+    assert_int_equal(e.controller_rx_overflows, 2);
+    assert_int_equal(e.tec, 95); /* no state bits: counters unchanged */
+}
+
+static void test_error_frames_bus_off(void **state)
+{
+    (void)state;
+    pma_linux_can_err_t e;
+    pma_linux_can_err_reset(&e);
+    apply(&e, CAN_ERR_FLAG | CAN_ERR_BUSOFF, 0, 0, 0);
+    assert_true(e.bus_off);
+    assert_int_equal(e.tec, 256);
+    assert_int_equal(pma_linux_can_err_state(&e), PMA_CAN_BUS_OFF);
+    /* counters and state reports do not move a latched bus-off */
+    apply(&e, CAN_ERR_FLAG | CAN_ERR_CRTL | CAN_ERR_CNT, CAN_ERR_CRTL_ACTIVE, 0, 0);
+    assert_int_equal(e.tec, 256);
+    assert_int_equal(pma_linux_can_err_state(&e), PMA_CAN_BUS_OFF);
+    /* the driver restarted (restart-ms) before the application asked: latched */
+    apply(&e, CAN_ERR_FLAG | CAN_ERR_RESTARTED, 0, 0, 0);
+    assert_true(e.kernel_restarted);
+    assert_int_equal(pma_linux_can_err_state(&e), PMA_CAN_BUS_OFF);
+    pma_linux_can_err_recovered(&e);
+    assert_int_equal(pma_linux_can_err_state(&e), PMA_CAN_ERROR_ACTIVE);
+    assert_int_equal(e.tec, 0);
+    assert_false(e.kernel_restarted);
+
+    /* asked first, then the driver's restart completes it */
+    apply(&e, CAN_ERR_FLAG | CAN_ERR_BUSOFF, 0, 0, 0);
+    e.recovery_requested = true;
+    apply(&e, CAN_ERR_FLAG | CAN_ERR_CRTL, CAN_ERR_CRTL_ACTIVE, 0, 0);
+    assert_int_equal(pma_linux_can_err_state(&e), PMA_CAN_BUS_OFF);
+    apply(&e, CAN_ERR_FLAG | CAN_ERR_RESTARTED, 0, 0, 0);
+    assert_int_equal(pma_linux_can_err_state(&e), PMA_CAN_ERROR_ACTIVE);
+    assert_false(e.recovery_requested);
+    assert_int_equal(e.tec, 0);
+    assert_int_equal(e.rec, 0);
+
+    /* a restart report while not bus-off: counters start from 0 */
+    apply(&e, CAN_ERR_FLAG | CAN_ERR_CRTL | CAN_ERR_CNT, CAN_ERR_CRTL_TX_PASSIVE, 140, 7);
+    apply(&e, CAN_ERR_FLAG | CAN_ERR_RESTARTED, 0, 0, 0);
+    assert_int_equal(e.tec, 0);
+    assert_int_equal(e.rec, 0);
+}
+
+static void test_reset_cause_names(void **state)
+{
+    (void)state;
+    assert_int_equal(pma_linux_reset_cause_parse(NULL), PMA_RESET_POWER_ON);
+    assert_int_equal(pma_linux_reset_cause_parse("WATCHDOG"), PMA_RESET_WATCHDOG);
+    assert_int_equal(pma_linux_reset_cause_parse("SOFTWARE"), PMA_RESET_SOFTWARE);
+    assert_int_equal(pma_linux_reset_cause_parse("PIN"), PMA_RESET_PIN);
+    assert_int_equal(pma_linux_reset_cause_parse("BROWNOUT"), PMA_RESET_BROWNOUT);
+    assert_int_equal(pma_linux_reset_cause_parse("POWER_ON"), PMA_RESET_POWER_ON);
+    assert_int_equal(pma_linux_reset_cause_parse("watchdog"), PMA_RESET_UNKNOWN);
+    assert_int_equal(pma_linux_reset_cause_parse(""), PMA_RESET_UNKNOWN);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test_setup_teardown(test_not_ready_and_name, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_no_can_devices, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_missing_interface, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_null_config_is_vcan0, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_config_errors, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_storage_errors, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_reinit, setup, teardown),
+        cmocka_unit_test(test_ring_order_and_capacity),
+        cmocka_unit_test(test_error_frames_counters),
+        cmocka_unit_test(test_error_frames_bus_off),
+        cmocka_unit_test(test_reset_cause_names),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
