@@ -406,7 +406,11 @@ void pma_app_poll(pma_app_t *app)
          * the next tick) and ask the controller to rejoin; CLEAR_FAULTS is
          * refused until it has */
         pma_app_raise_fault(app, PMA_FAULT_CAN_BUS_OFF);
-        (void)pma_hal_can_recover();
+        const uint64_t t = pma_hal_time_us();
+        if (t >= app->next_recover_us) { /* at most every PMA_APP_RECOVER_INTERVAL_US */
+            (void)pma_hal_can_recover();
+            app->next_recover_us = t + PMA_APP_RECOVER_INTERVAL_US;
+        }
     }
     const uint64_t now = pma_hal_time_us();
     if (now >= app->next_heartbeat_us) {

@@ -93,6 +93,10 @@ typedef enum pma_param_op {
  * the rest wait in the RX queue for the next iteration). */
 #define PMA_APP_RX_PER_STEP 64u
 
+/* While bus-off, recovery is requested at most this often (a request may
+ * cost a netlink message or a controller re-initialisation). */
+#define PMA_APP_RECOVER_INTERVAL_US 100000u
+
 typedef struct pma_app_platform {
     uint8_t plant_bridge;          /* 1: sensor and actuator over CAN frames (host build) */
     uint8_t lockstep;              /* the port ticks on sensor frames (reported in the heartbeat) */
@@ -129,6 +133,7 @@ typedef struct pma_app {
     uint32_t ticks_since_host_heartbeat;
     uint32_t late_ticks;
     uint64_t next_heartbeat_us;
+    uint64_t next_recover_us;      /* bus-off: next recovery request */
     uint8_t heartbeat_counter;
     uint8_t tick_started;
     /* sensor */
