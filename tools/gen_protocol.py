@@ -158,8 +158,11 @@ def gen_param_doc(params: list[dict[str, Any]]) -> str:
            "(`PMA_ERR_TYPE`, -19), the id is unknown (`PMA_ERR_UNKNOWN_ID`, -18), or the state forbids it\n",
            "(`PMA_ERR_STATE`, -20). Access: *live* any state; *stopped* not while RUNNING (takes effect\n",
            "at the next START); *idle* only while the output is inactive (BOOT, IDLE, FAULT).\n",
-           "Rules between parameters (for example `ctrl.u_min` < `ctrl.u_max`) are checked at ARM\n",
-           "and START, which are refused with `PMA_ERR_RANGE` when one does not hold.\n\n",
+           "Rules between parameters (for example `ctrl.u_min` < `ctrl.u_max`, `act.p_min_kpa` <\n",
+           "`act.p_max_kpa`, a valid sensor scaling) are checked at ARM and START, which are refused\n",
+           "with the error (`PMA_ERR_RANGE`, `PMA_ERR_NOT_FINITE`) when one does not hold; START also\n",
+           "checks the controller's own rules (for example `PMA_ERR_BAND`: the reference must keep\n",
+           "`ppc.w1_cm` inside the constraints).\n\n",
            "Types: f32 (IEEE 754 single), u32, i32; enumerations are u32 (values listed).\n\n"]
     groups: dict[str, list[dict[str, Any]]] = {}
     for p in params:

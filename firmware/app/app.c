@@ -200,7 +200,8 @@ static int cmd_start(pma_app_t *app)
 {
     if (app->state == PMA_STATE_FAULT) return PMA_ERR_FAULT;
     if (app->state != PMA_STATE_ARMED) return PMA_ERR_STATE;
-    int rc = pma_ctrl_start(&app->ctrl, &app->params, app->period_s);
+    int rc = check_cross_params(&app->params);
+    if (rc == PMA_OK) rc = pma_ctrl_start(&app->ctrl, &app->params, app->period_s);
     if (rc != PMA_OK) return rc;
     app->run_ticks = 0;
     app->ticks_since_host_heartbeat = 0;

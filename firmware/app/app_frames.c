@@ -46,6 +46,10 @@ static void send_ack(pma_app_t *app, uint8_t command, uint8_t arg, int rc)
 static void send_param_resp(pma_app_t *app, uint8_t op, uint16_t id, int rc, uint8_t type,
                             pma_param_value_t v)
 {
+    if (type > PMA_PARAM_I32) { /* an undefined Type echoed from a request: keep the reply decodable */
+        type = PMA_PARAM_U32;
+        v.u32 = 0;
+    }
     struct pma_proto_param_resp_t m;
     memset(&m, 0, sizeof m);
     m.op = (uint8_t)(op & 0x0Fu);
@@ -109,7 +113,9 @@ void pma_app_send_telemetry(pma_app_t *app)
     const uint32_t mask = app->params.telem_mask;
     uint8_t d[8];
     if (mask & 0x01u) {
-        const uint64_t ms = (app->run_ticks * app->period_us) / 1000u;
+        /* the control time of this step: run_ticks was counted up after it */
+        const uint64_t steps = app->run_ticks > 0 ? app->run_ticks - 1u : 0u;
+        const uint64_t ms = (steps * app->period_us) / 1000u;
         struct pma_proto_telem_a_t m = {.time_ms = (uint32_t)ms, .x_cm = app->x_cm};
         (void)pma_proto_telem_a_pack(d, &m, sizeof d);
         send(app, PMA_PROTO_TELEM_A_FRAME_ID, PMA_PROTO_TELEM_A_LENGTH, d);

@@ -3,12 +3,13 @@
  * and flags, never their state). The application latches the first fault,
  * applies the safe output in the same tick, and keeps it until CLEAR_FAULTS.
  *
- * Checked while the output is active (ARMED, RUNNING), in this order (the
- * first that holds is reported): sensor wire break, sensor read error, sensor
- * out of range, no new sensor sample (plant bridge), position beyond the
- * constraints by more than the margin, tick overrun; and while RUNNING: host
- * heartbeat lost, non-finite controller output, barrier clamped for too many
- * consecutive ticks. CAN bus-off is checked in every state. */
+ * CAN bus-off is checked in every state. Then, while the output is active
+ * (ARMED, RUNNING), in this order (the first that holds is reported): no new
+ * sensor sample (plant bridge), sensor wire break, sensor out of range, sensor
+ * read error, position beyond the constraints by more than the margin, tick
+ * overrun; and while RUNNING: host heartbeat lost, controller error,
+ * non-finite controller output, barrier clamped for too many consecutive
+ * ticks. */
 #ifndef PMA_SUPERVISOR_H
 #define PMA_SUPERVISOR_H
 
@@ -30,7 +31,9 @@ typedef enum pma_fault {
     PMA_FAULT_CAN_BUS_OFF = 11,        /* the CAN controller went bus-off */
     PMA_FAULT_CONTROLLER = 12,         /* a controller step returned an error */
     PMA_FAULT_WATCHDOG_RESET = 13,     /* the program was restarted by the watchdog */
-    PMA_FAULT_OUTPUT = 14,             /* the DAC or the actuator frame could not be written */
+    PMA_FAULT_OUTPUT = 14,             /* the DAC could not be written (board; in the plant-bridge
+                                          mode a PLANT_ACTUATOR frame that cannot be queued is
+                                          counted, and the rig times out) */
 } pma_fault_t;
 
 typedef struct pma_supervisor_limits {

@@ -651,7 +651,7 @@ struct pma_proto_heartbeat_t {
     uint8_t fault_code;
 
     /**
-     * Bit 0 output active, 1 plant bridge, 2 lockstep, 3 parameters changed since load or save, 4 parameters are the defaults (storage held no record), 5 CAN error-passive, 6 sensor valid, 7 RUNNING (a reference is active), 8 the last SAVE failed.
+     * Bit 0 output active, 1 plant bridge, 2 lockstep, 3 parameters changed since load or save, 4 parameters are the defaults (storage held no record), 5 CAN error-passive or bus-off, 6 sensor valid, 7 RUNNING (a reference is active), 8 the last SAVE failed.
      *
      * Range: 0..65535 (0..65535 -)
      * Scale: 1

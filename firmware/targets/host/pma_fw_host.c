@@ -167,6 +167,7 @@ int main(int argc, char **argv)
      * only its own (another node's sample is not received at all) */
     lc.tick_can_id = PMA_PROTO_PLANT_SENSOR_FRAME_ID;
     lc.tick_can_mask = PMA_BASE_ID_MASK;
+    lc.tick_can_dlc = PMA_PROTO_PLANT_SENSOR_LENGTH; /* a malformed sample is no tick */
     const pma_hal_config_t hc = {.can_bitrate_bps = 0, .port = &lc};
     if (pma_hal_init(&hc) != PMA_OK) {
         fprintf(stderr, "pma-fw-host: %s\n", pma_hal_linux_last_error());

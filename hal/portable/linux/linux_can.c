@@ -50,12 +50,14 @@ static struct {
     uint32_t socket_drops;         /* SO_RXQ_OVFL: frames the socket dropped since it was opened */
     bool tick_armed;               /* lockstep tick started: tick frames count */
     uint16_t tick_id, tick_mask;
+    int tick_dlc;                  /* required data length of a tick frame; -1: any */
     uint32_t ticks_pending;        /* tick frames read and not yet reported by a tick wait */
 } can = {.fd = -1};
 
-static bool is_tick(uint16_t id)
+static bool is_tick(const pma_can_frame_t *f)
 {
-    return (id & can.tick_mask) == (can.tick_id & can.tick_mask);
+    return (f->id & can.tick_mask) == (can.tick_id & can.tick_mask) &&
+           (can.tick_dlc < 0 || f->dlc == (uint8_t)can.tick_dlc);
 }
 
 /* Common checks of every CAN function. */
@@ -90,7 +92,7 @@ static void accept_frame(const struct can_frame *f, ssize_t bytes)
     pma_can_frame_t frame = {.id = (uint16_t)(f->can_id & CAN_SFF_MASK), .dlc = f->len};
     memcpy(frame.data, f->data, frame.dlc);
     (void)pma_linux_ring_push(&can.rx, &frame); /* the caller made room */
-    if (can.tick_armed && is_tick(frame.id)) can.ticks_pending++;
+    if (can.tick_armed && is_tick(&frame)) can.ticks_pending++;
 }
 
 /* Reads what the socket holds into the ring, until the socket is empty or the
@@ -246,12 +248,13 @@ static int open_fail(const char *what)
     return PMA_ERR_IO;
 }
 
-int pma_linux_can_open(const char *ifname, uint16_t tick_id, uint16_t tick_mask)
+int pma_linux_can_open(const char *ifname, uint16_t tick_id, uint16_t tick_mask, int tick_dlc)
 {
     pma_linux_can_close();
     (void)snprintf(can.ifname, sizeof can.ifname, "%s", ifname); /* length checked by the caller */
     can.tick_id = tick_id;
     can.tick_mask = tick_mask;
+    can.tick_dlc = tick_dlc;
 
     can.fd = socket(PF_CAN, SOCK_RAW | SOCK_NONBLOCK | SOCK_CLOEXEC, CAN_RAW);
     if (can.fd < 0) return open_fail("socket(PF_CAN)");
@@ -311,7 +314,7 @@ void pma_linux_can_tick_arm(void)
      * (and it then waits for the reply to it). */
     can.ticks_pending = 0;
     for (uint32_t i = 0; i < can.rx.count; ++i) {
-        if (is_tick(can.rx.slot[(can.rx.head + i) % PMA_HAL_LINUX_CAN_RX_DEPTH].id)) {
+        if (is_tick(&can.rx.slot[(can.rx.head + i) % PMA_HAL_LINUX_CAN_RX_DEPTH])) {
             can.ticks_pending++;
         }
     }

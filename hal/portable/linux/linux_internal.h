@@ -29,7 +29,7 @@ void pma_linux_clear_error(void);
 /* Opens, configures and binds the raw socket (accept-all filter, error
  * frames, drop counting); resets the ring and the error state. PMA_OK or
  * PMA_ERR_IO / PMA_ERR_RANGE with the reason set by pma_linux_set_error(). */
-int pma_linux_can_open(const char *ifname, uint16_t tick_id, uint16_t tick_mask);
+int pma_linux_can_open(const char *ifname, uint16_t tick_id, uint16_t tick_mask, int tick_dlc);
 /* Closes the socket (nothing open: does nothing). */
 void pma_linux_can_close(void);
 /* Lockstep: from now on every tick frame read from the socket counts as one

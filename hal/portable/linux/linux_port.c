@@ -56,6 +56,10 @@ static int validate(const pma_hal_linux_config_t *c, uint32_t block_size, uint32
                             "(no_can is set)");
         return PMA_ERR_RANGE;
     }
+    if (c->tick_can_dlc < -1 || c->tick_can_dlc > (int)PMA_CAN_DLC_MAX) {
+        pma_linux_set_error("pma_hal_linux: tick_can_dlc %d outside -1..8", c->tick_can_dlc);
+        return PMA_ERR_RANGE;
+    }
     if (c->tick_can_id > PMA_CAN_ID_MAX || c->tick_can_mask > PMA_CAN_ID_MAX) {
         pma_linux_set_error("pma_hal_linux: tick_can_id 0x%X / tick_can_mask 0x%X above 0x7FF",
                             (unsigned)c->tick_can_id, (unsigned)c->tick_can_mask);
@@ -98,7 +102,7 @@ int pma_hal_init(const pma_hal_config_t *cfg)
     if (rc != PMA_OK) return rc;
 
     if (!c->no_can) {
-        rc = pma_linux_can_open(c->can_ifname, c->tick_can_id, c->tick_can_mask);
+        rc = pma_linux_can_open(c->can_ifname, c->tick_can_id, c->tick_can_mask, c->tick_can_dlc);
         if (rc != PMA_OK) return rc;
     }
     if (c->storage_path != NULL) {

@@ -69,6 +69,8 @@ typedef struct pma_hal_linux_config {
     int lockstep;                  /* 0: real-time ticks (a clock); 1: a tick is a received frame
                                       with (id & tick_can_mask) == (tick_can_id & tick_can_mask) */
     uint16_t tick_can_id, tick_can_mask; /* lockstep only; 11 bits */
+    int tick_can_dlc;              /* lockstep only: a tick frame must also have this data length
+                                      (0..8); -1: any length */
     uint32_t lockstep_idle_wake_ms;/* lockstep: tick_wait returns PMA_ERR_EMPTY after this long
                                       without any frame; 0: default 10 */
     int32_t nvm_cut_after_ops;     /* test hook, -1: off. N >= 0: the (N+1)-th NVM program or
@@ -89,8 +91,8 @@ typedef struct pma_hal_linux_config {
     {                                                                                         \
         .can_ifname = PMA_HAL_LINUX_DEFAULT_IFNAME, .storage_path = NULL,                    \
         .nvm_block_size = 0, .nvm_block_count = 0, .lockstep = 0, .tick_can_id = 0,           \
-        .tick_can_mask = 0, .lockstep_idle_wake_ms = 0, .nvm_cut_after_ops = -1,              \
-        .nvm_cut_permille = 0, .argv = NULL, .no_can = 0                                      \
+        .tick_can_mask = 0, .tick_can_dlc = -1, .lockstep_idle_wake_ms = 0,                   \
+        .nvm_cut_after_ops = -1, .nvm_cut_permille = 0, .argv = NULL, .no_can = 0             \
     }
 
 /* Why the last pma_hal_init() failed, in words, e.g. "CAN interface vcan7:
