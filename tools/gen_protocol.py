@@ -162,7 +162,10 @@ def gen_param_doc(params: list[dict[str, Any]]) -> str:
            "`act.p_max_kpa`, a valid sensor scaling) are checked at ARM and START, which are refused\n",
            "with the error (`PMA_ERR_RANGE`, `PMA_ERR_NOT_FINITE`) when one does not hold; START also\n",
            "checks the controller's own rules (for example `PMA_ERR_BAND`: the reference must keep\n",
-           "`ppc.w1_cm` inside the constraints).\n\n",
+           "`ppc.w1_cm` inside the constraints). The sensor and DAC scalings (`adc.*`, `dac.*`) act\n",
+           "even while the output is inactive, so every SET must keep each of them valid as a whole\n",
+           "(for example `adc.raw_min_counts` <= `adc.raw_max_counts`, `dac.counts_per_kpa` not 0),\n",
+           "else it is refused with `PMA_ERR_RANGE`.\n\n",
            "Types: f32 (IEEE 754 single), u32, i32; enumerations are u32 (values listed).\n\n"]
     groups: dict[str, list[dict[str, Any]]] = {}
     for p in params:

@@ -31,7 +31,8 @@ float pma_actuator_safe_kpa(const pma_actuator_config_t *c, float p_prev_kpa)
     case PMA_SAFE_HOLD:
         return (isfinite(p_prev_kpa) && p_prev_kpa >= 0.0f) ? p_prev_kpa : 0.0f;
     case PMA_SAFE_FIXED:
-        return c->safe_kpa;
+        /* never above the actuator's limit, whatever the order the parameters were set in */
+        return c->safe_kpa < c->p_max_kpa ? c->safe_kpa : c->p_max_kpa;
     default:
         return 0.0f;
     }
@@ -40,7 +41,7 @@ float pma_actuator_safe_kpa(const pma_actuator_config_t *c, float p_prev_kpa)
 float pma_actuator_active_kpa(const pma_actuator_config_t *c, float u, float p_prev_kpa,
                               float period_s)
 {
-    if (!isfinite(u) || !isfinite(p_prev_kpa)) return pma_actuator_safe_kpa(c, 0.0f);
+    if (!isfinite(u) || !isfinite(p_prev_kpa)) return pma_actuator_safe_kpa(c, p_prev_kpa);
     float p = c->p0_kpa + (float)c->polarity * c->kpa_per_u * u;
     if (p < c->p_min_kpa) p = c->p_min_kpa;
     if (p > c->p_max_kpa) p = c->p_max_kpa;

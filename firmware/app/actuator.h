@@ -2,7 +2,7 @@
  *
  *   active: p = clamp(p0 + polarity * kpa_per_u * u, p_min, p_max), then
  *           limited to slew_kpa_s * period from the previous command
- *   safe:   VENT 0 kPa | HOLD the previous command | FIXED safe_kpa, at once
+ *   safe:   VENT 0 kPa | HOLD the previous command | FIXED min(safe_kpa, p_max), at once
  *           (no slew limit: a fault must reach the safe state within one tick)
  * Pressures are gauge, in kPa. A non-finite u or previous pressure gives the
  * safe pressure (the supervisor faults on it in the same tick). */

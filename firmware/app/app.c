@@ -72,7 +72,20 @@ static void actuator_config(const pma_params_t *p, pma_actuator_config_t *c)
     };
 }
 
-/* Rules between parameters, checked at ARM (docs/parameters.md). */
+/* Rules within the groups of parameters that act even while the output is
+ * inactive (the sensor and DAC scalings): enforced at every SET, so the
+ * safe-state output can always be converted. */
+int pma_app_check_param_groups(const pma_params_t *p)
+{
+    pma_adc_scaling_t as;
+    pma_dac_scaling_t ds;
+    pma_app_adc_scaling(p, &as);
+    dac_scaling(p, &ds);
+    int rc = pma_adc_validate_scaling(&as);
+    return rc != PMA_OK ? rc : pma_dac_validate_scaling(&ds);
+}
+
+/* Rules between parameters, checked at ARM and START (docs/parameters.md). */
 static int check_cross_params(const pma_params_t *p)
 {
     pma_adc_scaling_t as;
@@ -119,7 +132,9 @@ static void load_params(pma_app_t *app)
 int pma_app_load_params(pma_app_t *app)
 {
     if (!app->store_ready) return PMA_ERR_NOT_IMPLEMENTED;
-    uint8_t blob[PMA_PARAMS_BLOB_BYTES];
+    /* the record's own limit, not this firmware's blob size: a set saved by a
+     * firmware with more parameters loads too (unknown ids are skipped) */
+    uint8_t blob[PMA_PSTORE_MAX_BLOB_BYTES];
     pma_pstore_info_t info;
     int rc = pma_pstore_load(&app->store, blob, sizeof blob, &info);
     if (rc != PMA_OK) return rc;
@@ -127,6 +142,8 @@ int pma_app_load_params(pma_app_t *app)
     pma_params_t loaded;
     rc = pma_params_deserialize(&loaded, blob, info.len);
     if (rc < 0) return rc;
+    rc = pma_app_check_param_groups(&loaded);
+    if (rc != PMA_OK) return rc; /* an inconsistent stored set: keep what is in RAM */
     app->params = loaded;
     app->params_default = 0;
     app->params_changed = 0;
@@ -161,7 +178,7 @@ int pma_app_init(pma_app_t *app, const pma_app_platform_t *plat)
     if (rc == PMA_OK) rc = pma_app_apply_timing(app);
     app->next_heartbeat_us = pma_hal_time_us() + 1000u * (uint64_t)app->params.sys_heartbeat_ms;
     if (rc != PMA_OK) {
-        pma_app_raise_fault(app, PMA_FAULT_CONTROLLER);
+        pma_app_raise_fault(app, PMA_FAULT_INIT);
         return rc;
     }
     app->state = PMA_STATE_IDLE;
@@ -181,6 +198,10 @@ static int cmd_arm(pma_app_t *app)
     }
     int rc = check_cross_params(&app->params);
     if (rc != PMA_OK) return rc;
+    if (app->plat.plant_bridge &&
+        app->ticks_since_sample >= app->params.safety_sensor_timeout_ticks) {
+        return PMA_ERR_NOT_READY; /* the last sample is too old: the rig is not sending */
+    }
     if (app->sensor_status != PMA_OK) {
         /* never activate the output without a position: no sample yet, or a
          * sensor fault (its code) */
@@ -311,7 +332,14 @@ static void write_output(pma_app_t *app)
     pma_dac_scaling_t ds;
     dac_scaling(&app->params, &ds);
     uint16_t counts = app->dac_counts;
-    if (pma_dac_kpa_to_counts(&ds, app->p_kpa, &counts) == PMA_OK) app->dac_counts = counts;
+    if (pma_dac_kpa_to_counts(&ds, app->p_kpa, &counts) == PMA_OK) {
+        app->dac_counts = counts;
+    } else {
+        /* unreachable while the scaling is enforced at SET (and p is finite):
+         * never keep an active pressure on the output */
+        pma_app_raise_fault(app, PMA_FAULT_OUTPUT);
+        app->dac_counts = 0;
+    }
     int rc;
     if (app->plat.plant_bridge) {
         rc = pma_app_send_actuator(app);

@@ -73,7 +73,11 @@ void pma_app_send_heartbeat(pma_app_t *app)
     if (app->params_changed) flags |= PMA_HB_PARAMS_CHANGED;
     if (app->params_default) flags |= PMA_HB_PARAMS_DEFAULT;
     if (app->save_failed) flags |= PMA_HB_SAVE_FAILED;
-    if (app->sensor_status == PMA_OK) flags |= PMA_HB_SENSOR_VALID;
+    if (app->sensor_status == PMA_OK &&
+        !(app->plat.plant_bridge &&
+          app->ticks_since_sample >= app->params.safety_sensor_timeout_ticks)) {
+        flags |= PMA_HB_SENSOR_VALID;
+    }
     if (app->state == PMA_STATE_RUNNING) flags |= PMA_HB_REF_ACTIVE;
     pma_can_status_t cs;
     if (pma_hal_can_status(&cs) == PMA_OK && cs.state != PMA_CAN_ERROR_ACTIVE) {
@@ -227,6 +231,7 @@ static void on_param_req(pma_app_t *app, const pma_can_frame_t *f)
     const uint8_t req_type = f->dlc > 0 ? (uint8_t)(f->data[0] >> 4) : 0u;
     const uint16_t id = f->dlc > 2 ? (uint16_t)(f->data[1] | (f->data[2] << 8)) : 0u;
     struct pma_proto_param_req_t m;
+    memset(&m, 0, sizeof m);
     if (f->dlc != PMA_PROTO_PARAM_REQ_LENGTH || pma_proto_param_req_unpack(&m, f->data, f->dlc) != 0) {
         ++app->counters.frames_bad;
         send_param_resp(app, op, id, PMA_ERR_LENGTH, req_type, zero);
@@ -252,10 +257,20 @@ static void on_param_req(pma_app_t *app, const pma_can_frame_t *f)
             nv.u32 = m.value_u32; /* the raw bits: the codec unpacks only the Type's signal */
             if (req_type == PMA_PARAM_F32) nv.f32 = m.value_f32;
             if (req_type == PMA_PARAM_I32) nv.i32 = m.value_i32;
-            rc = pma_param_set(&app->params, id, (pma_param_type_t)req_type, nv, pma_app_phase(app));
+            rc = pma_param_check(id, (pma_param_type_t)req_type, nv, pma_app_phase(app));
+            if (rc == PMA_OK) { /* the scalings must stay consistent as a group */
+                pma_params_t trial = app->params;
+                (void)pma_param_set(&trial, id, (pma_param_type_t)req_type, nv, pma_app_phase(app));
+                rc = pma_app_check_param_groups(&trial);
+                if (rc == PMA_OK) app->params = trial;
+            }
             if (rc == PMA_OK) {
                 app->params_changed = 1;
                 if (id == PMA_PARAM_SYS_TICK_HZ) rc = pma_app_apply_timing(app);
+                if (id == PMA_PARAM_SYS_HEARTBEAT_MS) { /* the new period from now on */
+                    const uint64_t next = pma_hal_time_us() + 1000u * (uint64_t)nv.u32;
+                    if (next < app->next_heartbeat_us) app->next_heartbeat_us = next;
+                }
             }
         }
         if (d != NULL) (void)pma_param_get(&app->params, id, &type, &v); /* the value now */
@@ -294,12 +309,14 @@ void pma_app_handle_frame(pma_app_t *app, const pma_can_frame_t *f)
 {
     if (app == NULL || f == NULL) return;
     ++app->counters.frames_rx;
-    if (f->dlc > PMA_CAN_DLC_MAX || f->id > PMA_CAN_ID_MAX) {
-        ++app->counters.frames_bad;
+    /* emergency stops first: obeyed whatever the length, even an invalid one */
+    if (f->id == PMA_PROTO_ESTOP_ALL_FRAME_ID ||
+        f->id == (uint16_t)(PMA_PROTO_ESTOP_FRAME_ID | app->node_id)) {
+        pma_app_raise_fault(app, PMA_FAULT_ESTOP);
         return;
     }
-    if (f->id == PMA_PROTO_ESTOP_ALL_FRAME_ID) {
-        pma_app_raise_fault(app, PMA_FAULT_ESTOP);
+    if (f->dlc > PMA_CAN_DLC_MAX || f->id > PMA_CAN_ID_MAX) {
+        ++app->counters.frames_bad;
         return;
     }
     if ((f->id & PMA_NODE_ID_MASK) != app->node_id) {
@@ -307,9 +324,6 @@ void pma_app_handle_frame(pma_app_t *app, const pma_can_frame_t *f)
         return;
     }
     switch (f->id & PMA_BASE_ID_MASK) {
-    case PMA_PROTO_ESTOP_FRAME_ID:
-        pma_app_raise_fault(app, PMA_FAULT_ESTOP);
-        break;
     case PMA_PROTO_PLANT_SENSOR_FRAME_ID:
         on_plant_sensor(app, f);
         break;

@@ -34,6 +34,7 @@ int pma_ctrl_start(pma_ctrl_t *s, const pma_params_t *p, float period_s)
     CHECK(pma_ref_init_f32(&s->ref, &s->ref_cfg));
     const pma_band_t band = pma_band_constant(p->safety_x_min_cm, p->safety_x_max_cm);
     const float margin = (s->mode == PMA_CTRL_MODE_PPC && p->ppc_band_check) ? p->ppc_w1_cm : 0.0f;
+    s->stream_margin_cm = margin;
     CHECK(pma_band_check_ref(&band, &s->ref_cfg, p->ref_horizon_s, margin));
 
     pma_velest_config_t vc = {.kind = (uint8_t)p->vel_kind, .fc_hz = p->vel_fc_hz,
@@ -143,6 +144,8 @@ int pma_ctrl_stream(pma_ctrl_t *s, float target_cm, float x_min_cm, float x_max_
     if (s == NULL) return PMA_ERR_NULL;
     if (s->ref_cfg.kind != PMA_REF_STREAM) return PMA_ERR_UNSUPPORTED;
     if (!isfinite(target_cm)) return PMA_ERR_NOT_FINITE;
-    if (!(target_cm > x_min_cm && target_cm < x_max_cm)) return PMA_ERR_RANGE;
+    if (!(target_cm > x_min_cm + s->stream_margin_cm && target_cm < x_max_cm - s->stream_margin_cm)) {
+        return PMA_ERR_RANGE;
+    }
     return pma_ref_stream_f32(&s->ref, target_cm);
 }

@@ -36,6 +36,7 @@ typedef struct pma_ctrl {
         pma_pid_f32_t pid;
     } c;
     uint32_t breaches;      /* steps with a barrier clamp since START */
+    float stream_margin_cm; /* STREAM targets keep this far inside the band (PPC: w1) */
     pma_ctrl_out_t out;
 } pma_ctrl_t;
 
@@ -50,7 +51,9 @@ int pma_ctrl_start(pma_ctrl_t *s, const pma_params_t *p, float period_s);
 int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float *u);
 
 /* STREAM reference: a new target, accepted when finite and strictly inside
- * the constraint band [x_min, x_max]; PMA_ERR_UNSUPPORTED for other kinds. */
+ * the constraint band (x_min + m, x_max - m), m = w1 for PPC with the band
+ * check (eq. 14 as START checks it), else 0; PMA_ERR_UNSUPPORTED for other
+ * kinds. */
 int pma_ctrl_stream(pma_ctrl_t *s, float target_cm, float x_min_cm, float x_max_cm);
 
 #endif /* PMA_CONTROLLER_H */

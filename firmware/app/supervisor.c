@@ -42,7 +42,7 @@ const char *pma_fault_name(int fault)
     static const char *const names[] = {
         "NONE", "ESTOP", "POSITION_LIMIT", "SENSOR_RANGE", "SENSOR_WIRE_BREAK", "SENSOR_READ",
         "SENSOR_TIMEOUT", "BARRIER", "NOT_FINITE", "TICK_OVERRUN", "HOST_HEARTBEAT_LOST",
-        "CAN_BUS_OFF", "CONTROLLER", "WATCHDOG_RESET", "OUTPUT",
+        "CAN_BUS_OFF", "CONTROLLER", "WATCHDOG_RESET", "OUTPUT", "INIT",
     };
     if (fault < 0 || (size_t)fault >= sizeof names / sizeof names[0]) return "UNKNOWN";
     return names[fault];

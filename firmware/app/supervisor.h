@@ -34,6 +34,7 @@ typedef enum pma_fault {
     PMA_FAULT_OUTPUT = 14,             /* the DAC could not be written (board; in the plant-bridge
                                           mode a PLANT_ACTUATOR frame that cannot be queued is
                                           counted, and the rig times out) */
+    PMA_FAULT_INIT = 15,               /* start-up failed (CAN filters or the tick could not be set) */
 } pma_fault_t;
 
 typedef struct pma_supervisor_limits {

@@ -1,0 +1,651 @@
+/* Every fault drives the output to the configured safe state within the tick
+ * that detects it, and latches its code (HEARTBEAT FaultCode) until
+ * CLEAR_FAULTS:
+ *   sensor wire break, out of range, read error (fake ADC faults), sensor
+ *   timeout in bridge mode (no more PLANT_SENSOR), position beyond the limits
+ *   plus margin, tick overrun (late ticks from the fake clock and given to
+ *   pma_app_tick), host heartbeat lost while RUNNING (never while ARMED),
+ *   non-finite controller output, PPC barrier held for safety.barrier_ticks,
+ *   DAC write failure, CAN bus-off (CLEAR_FAULTS refused while bus-off),
+ *   watchdog reset (boots into FAULT WATCHDOG_RESET), ESTOP.
+ * The output is read where it leaves the node: the fake DAC's log in ADC mode
+ * (the write of this very step), the PLANT_ACTUATOR frame in bridge mode. The
+ * safe modes VENT, HOLD and FIXED are each checked. */
+#include "app_test.h"
+
+/* The safe output of the current parameters, as counts. */
+static uint16_t safe_counts(uint16_t active_counts)
+{
+    switch (app.params.safety_safe_mode) {
+    case PMA_SAFETY_SAFE_MODE_HOLD: return active_counts;
+    case PMA_SAFETY_SAFE_MODE_FIXED: return dac_counts_of(app.params.safety_safe_kpa);
+    default: return 0;
+    }
+}
+
+/* The output this step (ADC mode: the DAC write of this step; bridge: the
+ * PLANT_ACTUATOR frame of this step). */
+static uint16_t output_now(void)
+{
+    if (plat.plant_bridge) {
+        assert_int_equal(sent(PMA_PROTO_PLANT_ACTUATOR_FRAME_ID), 1);
+        return last_actuator().dac_counts;
+    }
+    return dac_now();
+}
+
+/* One step in which the fault must be found: before it the output is active,
+ * after it the node is in FAULT with `want`, and this same step put out the
+ * safe counts. */
+static void expect_fault_this_step(pma_fault_t want)
+{
+    assert_true(app.state == PMA_STATE_ARMED || app.state == PMA_STATE_RUNNING);
+    const uint16_t active = app.dac_counts;
+    cap_clear();
+    step();
+    assert_state(app.state, PMA_STATE_FAULT);
+    assert_fault(app.fault, want);
+    assert_int_equal(output_now(), safe_counts(active));
+    if (plat.plant_bridge) assert_int_equal(last_actuator().output_active, 0);
+}
+
+/* The fault stays latched (even when its cause is gone, even when others
+ * come), the output stays safe, the heartbeat reports it; CLEAR_FAULTS
+ * returns to IDLE (fault 0), and the node can be armed again. */
+static void expect_latched_then_clear(pma_fault_t want, uint8_t bridge)
+{
+    const uint16_t out = app.dac_counts;
+    pma_app_raise_fault(&app, PMA_FAULT_ESTOP); /* a later fault does not replace it */
+    uint8_t seq = (uint8_t)(app.bridge_seq + 1u);
+    for (int i = 0; i < 3; ++i) {
+        if (bridge) send_sample(seq++, counts_at(-1.5f));
+        cap_clear();
+        step();
+        assert_state(app.state, PMA_STATE_FAULT);
+        assert_fault(app.fault, want);
+        assert_int_equal(output_now(), out);
+    }
+    struct pma_proto_heartbeat_t h = next_heartbeat();
+    assert_int_equal(h.state, PMA_STATE_FAULT);
+    assert_int_equal(h.fault_code, want);
+    assert_false(h.flags & PMA_HB_OUTPUT_ACTIVE);
+    if (bridge) send_sample(seq++, counts_at(-1.5f));
+    const struct pma_proto_command_ack_t a = command(PMA_CMD_CLEAR_FAULTS, 0);
+    assert_status(a.result, PMA_OK);
+    assert_int_equal(a.state, PMA_STATE_IDLE);
+    assert_fault(app.fault, PMA_FAULT_NONE);
+    h = next_heartbeat();
+    assert_int_equal(h.state, PMA_STATE_IDLE);
+    assert_int_equal(h.fault_code, 0);
+}
+
+/* ----------------------------------------------------------- the sensor -- */
+
+static void test_sensor_faults_adc(void **state)
+{
+    (void)state;
+    static const struct { int kind; pma_fault_t fault; } cases[] = {
+        {0, PMA_FAULT_SENSOR_WIRE_BREAK}, {1, PMA_FAULT_SENSOR_RANGE},
+        {2, PMA_FAULT_SENSOR_RANGE}, {3, PMA_FAULT_SENSOR_READ},
+    };
+    for (int running = 0; running < 2; ++running) {
+        for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+            if (running) {
+                to_running(0);
+            } else {
+                to_armed(0);
+            }
+            assert_int_equal(app.dac_counts, T_P0_COUNTS);
+            switch (cases[i].kind) {
+            case 0: pma_fake_adc_wire_break(); break;
+            case 1: pma_fake_adc_out_of_range(4095); break;  /* the clipped ADC */
+            case 2: pma_fake_adc_out_of_range(760); break;   /* below raw_min, above wire break */
+            default: pma_fake_adc_read_error(); break;
+            }
+            expect_fault_this_step(cases[i].fault);
+            pma_fake_adc_clear_fault();
+            expect_latched_then_clear(cases[i].fault, 0);
+            command_ok(PMA_CMD_ARM, 0, PMA_OK);
+        }
+    }
+}
+
+/* Bridge: a sample at the wire-break level or out of range. */
+static void test_sensor_faults_bridge(void **state)
+{
+    (void)state;
+    to_running(1);
+    send_sample(22, 100); /* below the wire-break level 737 */
+    expect_fault_this_step(PMA_FAULT_SENSOR_WIRE_BREAK);
+    expect_latched_then_clear(PMA_FAULT_SENSOR_WIRE_BREAK, 1);
+    to_armed(1);
+    send_sample(21, 4095);
+    expect_fault_this_step(PMA_FAULT_SENSOR_RANGE);
+}
+
+/* Bridge: no new sample for safety.sensor_timeout_ticks ticks while the
+ * output is active (repeated samples do not count as new). */
+static void test_sensor_timeout_bridge(void **state)
+{
+    (void)state;
+    for (int running = 0; running < 2; ++running) {
+        if (running) {
+            to_running(1);
+        } else {
+            to_armed(1);
+        }
+        send_sample((uint8_t)(app.bridge_seq + 1u), counts_at(-1.5f));
+        cap_clear();
+        step();
+        assert_int_equal(last_actuator().sample, PMA_SAMPLE_NEW);
+        /* 9 ticks without a new sample (one of them a duplicate): still fine */
+        for (int i = 1; i < 10; ++i) {
+            if (i == 5) send_sample(app.bridge_seq, counts_at(-1.5f));
+            cap_clear();
+            step();
+            assert_state(app.state, running ? PMA_STATE_RUNNING : PMA_STATE_ARMED);
+            assert_int_equal(last_actuator().sample, PMA_SAMPLE_REPEATED);
+            assert_int_equal(last_actuator().dac_counts, T_P0_COUNTS);
+        }
+        /* the 10th */
+        expect_fault_this_step(PMA_FAULT_SENSOR_TIMEOUT);
+        send_sample((uint8_t)(app.bridge_seq + 1u), counts_at(-1.5f));
+        expect_latched_then_clear(PMA_FAULT_SENSOR_TIMEOUT, 1);
+    }
+    /* while IDLE nothing times out */
+    to_idle(1);
+    cap_clear();
+    steps(100);
+    assert_state(app.state, PMA_STATE_IDLE);
+    /* a longer timeout */
+    to_armed(1);
+    send_sample(30, counts_at(-1.5f));
+    step();
+    command_ok(PMA_CMD_DISARM, 0, PMA_OK);
+    set_u32(PMA_PARAM_SAFETY_SENSOR_TIMEOUT_TICKS, 50);
+    send_sample(31, counts_at(-1.5f));
+    command_ok(PMA_CMD_ARM, 0, PMA_OK); /* sample 31 is 0 ticks old */
+    steps(49);
+    assert_state(app.state, PMA_STATE_ARMED);
+    expect_fault_this_step(PMA_FAULT_SENSOR_TIMEOUT);
+}
+
+/* ------------------------------------------------------------- position -- */
+
+static void test_position_limit(void **state)
+{
+    (void)state;
+    static const float bad[] = {0.55f, -3.55f, 2.0f};
+    for (int bridge = 0; bridge < 2; ++bridge) {
+        for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
+            to_armed((uint8_t)bridge);
+            /* inside the margin: fine */
+            const float ok = bad[i] > 0.0f ? 0.45f : -3.45f;
+            if (bridge) {
+                send_sample(21, counts_at(ok));
+            } else {
+                pma_fake_adc_set(counts_at(ok));
+            }
+            cap_clear();
+            step();
+            assert_state(app.state, PMA_STATE_ARMED);
+            if (bridge) {
+                send_sample(22, counts_at(bad[i]));
+            } else {
+                pma_fake_adc_set(counts_at(bad[i]));
+            }
+            expect_fault_this_step(PMA_FAULT_POSITION_LIMIT);
+            if (!bridge) pma_fake_adc_set(counts_at(-1.5f));
+            expect_latched_then_clear(PMA_FAULT_POSITION_LIMIT, (uint8_t)bridge);
+        }
+    }
+    /* a smaller margin moves the trip point */
+    to_idle(0);
+    set_f32(PMA_PARAM_SAFETY_X_MARGIN_CM, 0.1f);
+    command_ok(PMA_CMD_ARM, 0, PMA_OK);
+    pma_fake_adc_set(counts_at(0.2f));
+    expect_fault_this_step(PMA_FAULT_POSITION_LIMIT);
+}
+
+/* ---------------------------------------------------------- tick overrun -- */
+
+static void test_tick_overrun(void **state)
+{
+    (void)state;
+    /* from the fake clock: the loop was late by 2 periods (allowed), then 3 */
+    to_running(0);
+    pma_fake_time_advance_us(2u * T_PERIOD_US);
+    cap_clear();
+    step();
+    assert_int_equal(app.late_ticks, 2);
+    assert_state(app.state, PMA_STATE_RUNNING);
+    pma_fake_time_advance_us(3u * T_PERIOD_US);
+    assert_int_equal(app.state, PMA_STATE_RUNNING);
+    expect_fault_this_step(PMA_FAULT_TICK_OVERRUN);
+    assert_int_equal(app.late_ticks, 3);
+    expect_latched_then_clear(PMA_FAULT_TICK_OVERRUN, 0);
+
+    /* given directly to pma_app_tick, in ARMED */
+    to_armed(0);
+    pma_app_tick(&app, 2);
+    assert_state(app.state, PMA_STATE_ARMED);
+    pma_app_tick(&app, 3);
+    assert_state(app.state, PMA_STATE_FAULT);
+    assert_fault(app.fault, PMA_FAULT_TICK_OVERRUN);
+    assert_int_equal(dac_now(), 0);
+
+    /* safety.max_late_ticks 0: one late tick trips */
+    to_idle(0);
+    set_u32(PMA_PARAM_SAFETY_MAX_LATE_TICKS, 0);
+    command_ok(PMA_CMD_ARM, 0, PMA_OK);
+    pma_fake_time_advance_us(T_PERIOD_US);
+    expect_fault_this_step(PMA_FAULT_TICK_OVERRUN);
+
+    /* late ticks while IDLE are no fault */
+    to_idle(0);
+    pma_fake_time_advance_us(50u * T_PERIOD_US);
+    step();
+    assert_state(app.state, PMA_STATE_IDLE);
+}
+
+/* ----------------------------------------------------------- host heartbeat -- */
+
+static void test_host_heartbeat_lost(void **state)
+{
+    (void)state;
+    /* ARMED: no host heartbeat needed */
+    to_armed(0);
+    steps(2000);
+    assert_state(app.state, PMA_STATE_ARMED);
+    /* RUNNING with heartbeats every 100 ms: fine for 3 s */
+    command_ok(PMA_CMD_START, 0, PMA_OK);
+    steps_hb(3000);
+    assert_state(app.state, PMA_STATE_RUNNING);
+    /* the last one came 100 ticks ago (steps_hb sends at the start of each
+     * hundred); the 500th tick without one (500 ms) trips */
+    steps(399);
+    assert_state(app.state, PMA_STATE_RUNNING);
+    expect_fault_this_step(PMA_FAULT_HOST_HEARTBEAT_LOST);
+    expect_latched_then_clear(PMA_FAULT_HOST_HEARTBEAT_LOST, 0);
+
+    /* the timer starts at START, not at the last heartbeat before it */
+    to_armed(0);
+    send_host_heartbeat(0);
+    steps(1000);
+    command_ok(PMA_CMD_START, 0, PMA_OK); /* run tick 1 */
+    steps(498);
+    assert_state(app.state, PMA_STATE_RUNNING);
+    expect_fault_this_step(PMA_FAULT_HOST_HEARTBEAT_LOST);
+
+    /* STOP and START again: the time RUNNING before the STOP does not count */
+    to_running(0);
+    steps(400);
+    command_ok(PMA_CMD_STOP, 0, PMA_OK);
+    steps(100);
+    command_ok(PMA_CMD_START, 0, PMA_OK);
+    steps(498);
+    assert_state(app.state, PMA_STATE_RUNNING);
+    expect_fault_this_step(PMA_FAULT_HOST_HEARTBEAT_LOST);
+
+    /* 0 disables it */
+    to_idle(0);
+    set_u32(PMA_PARAM_SAFETY_HOST_TIMEOUT_MS, 0);
+    command_ok(PMA_CMD_ARM, 0, PMA_OK);
+    command_ok(PMA_CMD_START, 0, PMA_OK);
+    steps(3000);
+    assert_state(app.state, PMA_STATE_RUNNING);
+}
+
+/* --------------------------------------------------------------- NaN -- */
+
+/* A NaN cannot be set (PARAM_REQ refuses it) and the controllers never
+ * produce one from finite inputs; this stands for a corrupted value: the
+ * OPEN_LOOP controller passes ctrl.openloop_u through, and a NaN there must
+ * fault NOT_FINITE with the safe output in that tick. */
+static void test_non_finite_output(void **state)
+{
+    (void)state;
+    to_armed(0);
+    command_ok(PMA_CMD_SELECT_CONTROLLER, PMA_CTRL_MODE_OPEN_LOOP, PMA_OK);
+    assert_status(set_param(PMA_PARAM_CTRL_OPENLOOP_U, vf(NAN)), PMA_ERR_NOT_FINITE);
+    set_f32(PMA_PARAM_CTRL_OPENLOOP_U, 30.0f);
+    command_ok(PMA_CMD_START, 0, PMA_OK);
+    steps(10);
+    assert_int_equal(dac_now(), dac_counts_of(330.0f)); /* p0 + u */
+    app.params.ctrl_openloop_u = NAN; /* corruption, not through the protocol */
+    expect_fault_this_step(PMA_FAULT_NOT_FINITE);
+    app.params.ctrl_openloop_u = 0.0f;
+    expect_latched_then_clear(PMA_FAULT_NOT_FINITE, 0);
+    /* infinity likewise */
+    command_ok(PMA_CMD_ARM, 0, PMA_OK);
+    command_ok(PMA_CMD_START, 0, PMA_OK);
+    app.params.ctrl_openloop_u = -INFINITY;
+    expect_fault_this_step(PMA_FAULT_NOT_FINITE);
+}
+
+/* ------------------------------------------------------------- barrier -- */
+
+/* PPC: the position held far from the reference drives lambda1 into its
+ * barrier; safety.barrier_ticks consecutive clamped ticks fault. */
+static void test_barrier(void **state)
+{
+    (void)state;
+    to_running(0);
+    pma_fake_adc_set(counts_at(-0.2f)); /* e = 1.3 cm >> w1 = 0.2 cm, inside the band */
+    uint32_t run = 0, t = 0;
+    while (app.state == PMA_STATE_RUNNING && t < 3000) {
+        if (t % 100 == 0) send_host_heartbeat((uint8_t)t);
+        const uint16_t active = app.dac_counts;
+        cap_clear();
+        step();
+        ++t;
+        run = app.ctrl.out.barrier ? run + 1u : 0u;
+        if (run < 100u) {
+            assert_state(app.state, PMA_STATE_RUNNING);
+        } else {
+            /* the 100th consecutive clamped tick */
+            assert_state(app.state, PMA_STATE_FAULT);
+            assert_fault(app.fault, PMA_FAULT_BARRIER);
+            assert_int_equal(dac_now(), safe_counts(active));
+        }
+    }
+    assert_int_equal(run, 100u);
+    assert_true(app.ctrl.breaches >= 100u);
+    expect_latched_then_clear(PMA_FAULT_BARRIER, 0);
+
+    /* 0 disables the check */
+    set_u32(PMA_PARAM_SAFETY_BARRIER_TICKS, 0);
+    pma_fake_adc_set(counts_at(-1.5f));
+    step();
+    command_ok(PMA_CMD_ARM, 0, PMA_OK);
+    command_ok(PMA_CMD_START, 0, PMA_OK);
+    pma_fake_adc_set(counts_at(-0.2f));
+    uint32_t longest = 0;
+    run = 0;
+    for (t = 0; t < 1500; ++t) {
+        if (t % 100 == 0) send_host_heartbeat((uint8_t)t);
+        step();
+        run = app.ctrl.out.barrier ? run + 1u : 0u;
+        if (run > longest) longest = run;
+    }
+    assert_state(app.state, PMA_STATE_RUNNING);
+    assert_true(longest > 500u); /* far beyond the 100 that trip when enabled */
+}
+
+/* ---------------------------------------------------------------- DAC -- */
+
+/* The DAC refuses the counts (beyond the fake's 12 bits while dac.max_counts
+ * allows them): OUTPUT fault, and the safe value is written instead. */
+static void test_dac_failure(void **state)
+{
+    (void)state;
+    to_idle(0);
+    set_u32(PMA_PARAM_DAC_MAX_COUNTS, 65535);
+    set_f32(PMA_PARAM_ACT_P_MAX_KPA, 1000.0f);
+    set_f32(PMA_PARAM_ACT_P0_KPA, 950.0f); /* 4322 counts */
+    command_ok(PMA_CMD_ARM, 0, PMA_OK);
+    uint32_t t = 0;
+    while (app.state == PMA_STATE_ARMED && t < 100) {
+        step();
+        ++t;
+    }
+    assert_state(app.state, PMA_STATE_FAULT);
+    assert_fault(app.fault, PMA_FAULT_OUTPUT);
+    assert_int_equal(dac_now(), 0); /* the safe value went out */
+    assert_true(t > 40); /* the slew limit first walks up to the DAC's end */
+}
+
+/* -------------------------------------------------------------- bus-off -- */
+
+static void test_bus_off(void **state)
+{
+    (void)state;
+    /* RUNNING, the bus breaks: the node's own sends push it bus-off */
+    to_running(0);
+    set_u32(PMA_PARAM_TELEM_DECIMATION, 1); /* 5 frames per tick */
+    pma_fake_can_set_recovery(0, true);     /* the bus stays broken */
+    pma_fake_can_bus_errors(true);
+    uint32_t t = 0;
+    pma_can_status_t cs;
+    for (;;) {
+        assert_status(pma_hal_can_status(&cs), PMA_OK);
+        if (cs.state == PMA_CAN_BUS_OFF) break;
+        assert_state(app.state, PMA_STATE_RUNNING);
+        step();
+        ++t;
+        assert_true(t < 20);
+    }
+    /* it went bus-off in the telemetry of the last tick: the fault is raised
+     * in that step's housekeeping and the output goes safe in the next tick */
+    assert_state(app.state, PMA_STATE_FAULT);
+    assert_fault(app.fault, PMA_FAULT_CAN_BUS_OFF);
+    step();
+    assert_int_equal(dac_now(), 0);
+    /* CLEAR_FAULTS refused while bus-off (no frame arrives now: called directly) */
+    assert_status(pma_app_command(&app, PMA_CMD_CLEAR_FAULTS, 0), PMA_ERR_BUS_OFF);
+    assert_state(app.state, PMA_STATE_FAULT);
+    pma_can_frame_t f = frame_of(PMA_PROTO_COMMAND_FRAME_ID, T_NODE, 2,
+                                 (const uint8_t[]){PMA_CMD_CLEAR_FAULTS, 0});
+    assert_status(pma_fake_can_inject(&f), PMA_ERR_BUS_OFF);
+    const uint32_t failed = app.counters.tx_failed;
+    pma_app_handle_frame(&app, &f); /* its ACK cannot be sent */
+    assert_int_equal(app.counters.tx_failed, failed + 1u);
+    assert_state(app.state, PMA_STATE_FAULT);
+    steps(10);
+    assert_state(app.state, PMA_STATE_FAULT);
+    /* the bus is repaired: the requested recovery completes */
+    pma_fake_can_bus_errors(false);
+    pma_fake_can_set_recovery(0, false);
+    step();
+    assert_status(pma_hal_can_status(&cs), PMA_OK);
+    assert_int_equal(cs.state, PMA_CAN_ERROR_ACTIVE);
+    assert_fault(app.fault, PMA_FAULT_CAN_BUS_OFF);
+    expect_latched_then_clear(PMA_FAULT_CAN_BUS_OFF, 0);
+
+    /* bus-off while IDLE faults too; in ARMED the output goes safe in the
+     * tick that sees it */
+    to_armed(0);
+    pma_fake_can_set_recovery(5000, false); /* rejoins 5 ms after the request */
+    pma_fake_can_set_error_counters(256, 0);
+    expect_fault_this_step(PMA_FAULT_CAN_BUS_OFF);
+    assert_status(pma_app_command(&app, PMA_CMD_CLEAR_FAULTS, 0), PMA_ERR_BUS_OFF);
+    steps(5);
+    assert_status(pma_app_command(&app, PMA_CMD_CLEAR_FAULTS, 0), PMA_OK);
+    assert_state(app.state, PMA_STATE_IDLE);
+    pma_fake_can_set_error_counters(256, 0);
+    step();
+    assert_state(app.state, PMA_STATE_FAULT);
+    assert_fault(app.fault, PMA_FAULT_CAN_BUS_OFF);
+}
+
+/* In bridge mode the fault is visible in the PLANT_ACTUATOR frame of the
+ * tick (once the bus is back: nothing is sent while bus-off). */
+static void test_bridge_fault_frame(void **state)
+{
+    (void)state;
+    to_running(1);
+    send_sample(22, counts_at(-1.5f));
+    cap_clear();
+    step();
+    struct pma_proto_plant_actuator_t m = last_actuator();
+    assert_int_equal(m.output_active, 1);
+    assert_int_equal(m.seq, 22);
+    assert_true(m.dac_counts > 0);
+    /* ESTOP frame then a sample in the same step: the actuator frame of this
+     * tick already carries the safe output and echoes the new seq */
+    pma_can_frame_t f = frame_of(PMA_PROTO_ESTOP_FRAME_ID, T_NODE, 0, NULL);
+    assert_status(pma_fake_can_inject(&f), PMA_OK);
+    send_sample(23, counts_at(-1.5f));
+    cap_clear();
+    step();
+    m = last_actuator();
+    assert_int_equal(m.output_active, 0);
+    assert_int_equal(m.dac_counts, 0);
+    assert_int_equal(m.seq, 23);
+    assert_int_equal(m.sample, PMA_SAMPLE_NEW);
+    assert_fault(app.fault, PMA_FAULT_ESTOP);
+}
+
+/* Bridge: a PLANT_ACTUATOR frame that cannot be queued is counted, not a
+ * fault (supervisor.h, PMA_FAULT_OUTPUT); the rig, getting no commands, is
+ * the one that times out. */
+static void test_bridge_actuator_frame_failure_counted(void **state)
+{
+    (void)state;
+    to_running(1);
+    pma_fake_can_block_tx(true); /* nothing leaves; the 4-frame queue fills */
+    uint8_t s = 22;
+    for (int i = 0; i < 20; ++i) {
+        send_sample(s++, counts_at(-1.5f));
+        step();
+    }
+    assert_true(app.counters.tx_failed >= 16u);
+    assert_state(app.state, PMA_STATE_RUNNING);
+    pma_fake_can_block_tx(false); /* the four queued frames go out */
+    cap_clear();
+    drain();
+    assert_int_equal(sent(PMA_PROTO_PLANT_ACTUATOR_FRAME_ID), 4);
+    send_sample(s, counts_at(-1.5f));
+    cap_clear();
+    step();
+    assert_int_equal(last_actuator().seq, s);
+    assert_int_equal(last_actuator().output_active, 1);
+}
+
+/* ----------------------------------------------------------- watchdog -- */
+
+static void test_watchdog_reset(void **state)
+{
+    (void)state;
+    to_running(0);
+    assert_true(pma_fake_watchdog_running());
+    /* the loop hangs: no step (no kick) for longer than the timeout */
+    pma_fake_time_advance_us(T_WATCHDOG_MS * 1000u + 1u);
+    assert_true(pma_fake_watchdog_expired());
+    pma_fake_reboot();
+    assert_status(restart_app(), PMA_OK);
+    /* the BOOT heartbeat tells the host why */
+    struct pma_proto_heartbeat_t h = last_heartbeat();
+    assert_int_equal(h.state, PMA_STATE_BOOT);
+    assert_int_equal(h.reset_cause, PMA_RESET_WATCHDOG);
+    assert_state(app.state, PMA_STATE_FAULT);
+    assert_fault(app.fault, PMA_FAULT_WATCHDOG_RESET);
+    /* the first tick puts out the safe value */
+    cap_clear();
+    step();
+    assert_int_equal(dac_now(), 0);
+    assert_true(pma_fake_watchdog_running()); /* started again */
+    command_ok(PMA_CMD_ARM, 0, PMA_ERR_FAULT);
+    h = next_heartbeat();
+    assert_int_equal(h.fault_code, PMA_FAULT_WATCHDOG_RESET);
+    assert_int_equal(h.reset_cause, PMA_RESET_WATCHDOG);
+    expect_latched_then_clear(PMA_FAULT_WATCHDOG_RESET, 0);
+    command_ok(PMA_CMD_ARM, 0, PMA_OK);
+
+    /* kicked in time (the loop keeps stepping): no reset */
+    steps(1000);
+    assert_false(pma_fake_watchdog_expired());
+    /* a software reset is no fault */
+    pma_fake_reboot();
+    assert_status(restart_app(), PMA_OK);
+    assert_int_equal(last_heartbeat().reset_cause, PMA_RESET_SOFTWARE);
+    assert_state(app.state, PMA_STATE_IDLE);
+}
+
+/* ----------------------------------------------------------- safe modes -- */
+
+/* VENT, HOLD and FIXED, each with a sensor fault while RUNNING, with ESTOP,
+ * and in IDLE after DISARM. */
+static void test_safe_modes(void **state)
+{
+    (void)state;
+    static const struct { uint32_t mode; float kpa; } modes[] = {
+        {PMA_SAFETY_SAFE_MODE_VENT, 0.0f},
+        {PMA_SAFETY_SAFE_MODE_HOLD, 0.0f},
+        {PMA_SAFETY_SAFE_MODE_FIXED, 100.0f},
+        {PMA_SAFETY_SAFE_MODE_FIXED, 600.0f},
+    };
+    for (int bridge = 0; bridge < 2; ++bridge) {
+        for (size_t i = 0; i < sizeof modes / sizeof modes[0]; ++i) {
+            to_idle((uint8_t)bridge);
+            set_u32(PMA_PARAM_SAFETY_SAFE_MODE, modes[i].mode);
+            set_f32(PMA_PARAM_SAFETY_SAFE_KPA, modes[i].kpa);
+            /* OPEN_LOOP u = 40: 340 kPa, 1547 counts */
+            command_ok(PMA_CMD_SELECT_CONTROLLER, PMA_CTRL_MODE_OPEN_LOOP, PMA_OK);
+            set_f32(PMA_PARAM_CTRL_OPENLOOP_U, 40.0f);
+            /* IDLE puts out the safe state already */
+            cap_clear();
+            if (bridge) send_sample(1, counts_at(-1.5f));
+            step();
+            const uint16_t idle = modes[i].mode == PMA_SAFETY_SAFE_MODE_FIXED
+                                      ? dac_counts_of(modes[i].kpa) : 0u;
+            assert_int_equal(output_now(), idle);
+            command_ok(PMA_CMD_ARM, 0, PMA_OK);
+            command_ok(PMA_CMD_START, 0, PMA_OK);
+            for (uint8_t s = 2; s < 60; ++s) {
+                if (bridge) send_sample(s, counts_at(-1.5f));
+                step();
+            }
+            assert_int_equal(app.dac_counts, dac_counts_of(340.0f));
+            /* the fault */
+            if (bridge) {
+                send_sample(60, 10);
+            } else {
+                pma_fake_adc_wire_break();
+            }
+            expect_fault_this_step(PMA_FAULT_SENSOR_WIRE_BREAK);
+            const uint16_t want = modes[i].mode == PMA_SAFETY_SAFE_MODE_VENT ? 0u
+                                  : modes[i].mode == PMA_SAFETY_SAFE_MODE_HOLD
+                                      ? dac_counts_of(340.0f)
+                                      : dac_counts_of(modes[i].kpa);
+            assert_int_equal(app.dac_counts, want);
+            /* held there, not slewed */
+            for (uint8_t s = 61; s < 70; ++s) {
+                if (bridge) send_sample(s, counts_at(-1.5f));
+                cap_clear();
+                step();
+                assert_int_equal(output_now(), want);
+            }
+            pma_fake_adc_clear_fault();
+            /* ESTOP from ARMED at the preset */
+            command_ok(PMA_CMD_CLEAR_FAULTS, 0, PMA_OK);
+            uint8_t s = 70;
+            if (bridge) send_sample(s++, counts_at(-1.5f));
+            command_ok(PMA_CMD_ARM, 0, PMA_OK);
+            for (int k = 0; k < 40; ++k) {
+                if (bridge) send_sample(s++, counts_at(-1.5f));
+                step();
+            }
+            assert_int_equal(app.dac_counts, T_P0_COUNTS);
+            pma_can_frame_t f = frame_of(PMA_PROTO_ESTOP_ALL_FRAME_ID, 0, 0, NULL);
+            assert_status(pma_fake_can_inject(&f), PMA_OK);
+            expect_fault_this_step(PMA_FAULT_ESTOP);
+            const uint16_t want2 = modes[i].mode == PMA_SAFETY_SAFE_MODE_VENT ? 0u
+                                   : modes[i].mode == PMA_SAFETY_SAFE_MODE_HOLD
+                                       ? T_P0_COUNTS
+                                       : dac_counts_of(modes[i].kpa);
+            assert_int_equal(app.dac_counts, want2);
+        }
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_sensor_faults_adc),
+        cmocka_unit_test(test_sensor_faults_bridge),
+        cmocka_unit_test(test_sensor_timeout_bridge),
+        cmocka_unit_test(test_position_limit),
+        cmocka_unit_test(test_tick_overrun),
+        cmocka_unit_test(test_host_heartbeat_lost),
+        cmocka_unit_test(test_non_finite_output),
+        cmocka_unit_test(test_barrier),
+        cmocka_unit_test(test_dac_failure),
+        cmocka_unit_test(test_bus_off),
+        cmocka_unit_test(test_bridge_fault_frame),
+        cmocka_unit_test(test_bridge_actuator_frame_failure_counted),
+        cmocka_unit_test(test_watchdog_reset),
+        cmocka_unit_test(test_safe_modes),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,413 @@
+/* The safety supervisor (supervisor.h) and the actuator limits and safe
+ * states (actuator.h): pure functions, no HAL.
+ *
+ * Supervisor: each fault condition on its own, its threshold (one below does
+ * not trip, at/above does), the documented priority order, nothing while the
+ * output is inactive except CAN bus-off, the RUNNING-only checks ignored while
+ * ARMED, a NaN or infinite position trips.
+ * Actuator: validation rules, p = p0 + polarity * kpa_per_u * u with the
+ * clamp to [p_min, p_max] and the slew limit, the safe modes VENT / HOLD /
+ * FIXED (at once, no slew limit), non-finite inputs. */
+#include "app_test.h"
+
+/* ------------------------------------------------------------ supervisor -- */
+
+static pma_supervisor_limits_t lim;
+static pma_supervisor_input_t in;
+
+/* Defaults of params.toml at 1 kHz; a RUNNING tick with nothing wrong. */
+static int setup_supervisor(void **state)
+{
+    (void)state;
+    lim = (pma_supervisor_limits_t){
+        .x_min_cm = -3.0f, .x_max_cm = 0.0f, .x_margin_cm = 0.5f, .sensor_timeout_ticks = 10,
+        .max_late_ticks = 2, .host_timeout_ticks = 500, .barrier_ticks = 100,
+    };
+    in = (pma_supervisor_input_t){
+        .output_active = 1, .running = 1, .bus_off = 0, .sensor_status = PMA_OK,
+        .x_cm = -1.5f, .ticks_since_sample = 0, .late_ticks = 0,
+        .ticks_since_host_heartbeat = 0, .controller_error = 0, .u = 12.5f, .barrier_run = 0,
+    };
+    return 0;
+}
+
+#define check(want) assert_fault(pma_supervisor_check(&lim, &in), (want))
+
+static void test_supervisor_nothing_wrong(void **state)
+{
+    (void)state;
+    check(PMA_FAULT_NONE);
+    in.running = 0;
+    check(PMA_FAULT_NONE);
+    assert_fault(pma_supervisor_check(NULL, &in), PMA_FAULT_CONTROLLER);
+    assert_fault(pma_supervisor_check(&lim, NULL), PMA_FAULT_CONTROLLER);
+}
+
+static void test_supervisor_each_condition(void **state)
+{
+    (void)state;
+    pma_supervisor_input_t good = in;
+
+    in.bus_off = 1;
+    check(PMA_FAULT_CAN_BUS_OFF);
+    in = good;
+    in.sensor_status = PMA_ERR_WIRE_BREAK;
+    check(PMA_FAULT_SENSOR_WIRE_BREAK);
+    in.sensor_status = PMA_ERR_RANGE;
+    check(PMA_FAULT_SENSOR_RANGE);
+    in.sensor_status = PMA_ERR_IO;
+    check(PMA_FAULT_SENSOR_READ);
+    in.sensor_status = PMA_ERR_NOT_READY;  /* no sample at all: not a valid reading */
+    check(PMA_FAULT_SENSOR_READ);
+    in = good;
+
+    /* sensor timeout: at sensor_timeout_ticks, not one below */
+    in.ticks_since_sample = 9;
+    check(PMA_FAULT_NONE);
+    in.ticks_since_sample = 10;
+    check(PMA_FAULT_SENSOR_TIMEOUT);
+    in.ticks_since_sample = UINT32_MAX;
+    check(PMA_FAULT_SENSOR_TIMEOUT);
+    in = good;
+
+    /* position: [x_min - margin, x_max + margin] is allowed, inclusive */
+    in.x_cm = 0.5f;
+    check(PMA_FAULT_NONE);
+    in.x_cm = -3.5f;
+    check(PMA_FAULT_NONE);
+    in.x_cm = nextafterf(0.5f, 1.0f);
+    check(PMA_FAULT_POSITION_LIMIT);
+    in.x_cm = nextafterf(-3.5f, -4.0f);
+    check(PMA_FAULT_POSITION_LIMIT);
+    in.x_cm = 40.0f;
+    check(PMA_FAULT_POSITION_LIMIT);
+    in = good;
+
+    /* tick overrun: more than max_late_ticks */
+    in.late_ticks = 2;
+    check(PMA_FAULT_NONE);
+    in.late_ticks = 3;
+    check(PMA_FAULT_TICK_OVERRUN);
+    in = good;
+
+    /* host heartbeat: at host_timeout_ticks; 0 disables */
+    in.ticks_since_host_heartbeat = 499;
+    check(PMA_FAULT_NONE);
+    in.ticks_since_host_heartbeat = 500;
+    check(PMA_FAULT_HOST_HEARTBEAT_LOST);
+    lim.host_timeout_ticks = 0;
+    in.ticks_since_host_heartbeat = UINT32_MAX;
+    check(PMA_FAULT_NONE);
+    lim.host_timeout_ticks = 500;
+    in = good;
+
+    in.controller_error = 1;
+    check(PMA_FAULT_CONTROLLER);
+    in = good;
+
+    in.u = NAN;
+    check(PMA_FAULT_NOT_FINITE);
+    in.u = INFINITY;
+    check(PMA_FAULT_NOT_FINITE);
+    in.u = -INFINITY;
+    check(PMA_FAULT_NOT_FINITE);
+    in.u = 10000.0f;
+    check(PMA_FAULT_NONE);
+    in = good;
+
+    /* barrier: barrier_ticks consecutive clamps; 0 disables */
+    in.barrier_run = 99;
+    check(PMA_FAULT_NONE);
+    in.barrier_run = 100;
+    check(PMA_FAULT_BARRIER);
+    lim.barrier_ticks = 0;
+    in.barrier_run = UINT32_MAX;
+    check(PMA_FAULT_NONE);
+}
+
+static void test_supervisor_nan_position_trips(void **state)
+{
+    (void)state;
+    in.x_cm = NAN;
+    check(PMA_FAULT_POSITION_LIMIT);
+    in.x_cm = -NAN;
+    check(PMA_FAULT_POSITION_LIMIT);
+    in.x_cm = INFINITY;
+    check(PMA_FAULT_POSITION_LIMIT);
+    in.x_cm = -INFINITY;
+    check(PMA_FAULT_POSITION_LIMIT);
+    in.running = 0; /* ARMED too */
+    in.x_cm = NAN;
+    check(PMA_FAULT_POSITION_LIMIT);
+}
+
+/* Inactive output (IDLE, FAULT, BOOT): only bus-off. */
+static void test_supervisor_inactive_only_bus_off(void **state)
+{
+    (void)state;
+    in.output_active = 0;
+    in.running = 0;
+    in.sensor_status = PMA_ERR_WIRE_BREAK;
+    in.x_cm = NAN;
+    in.ticks_since_sample = UINT32_MAX;
+    in.late_ticks = 1000;
+    in.ticks_since_host_heartbeat = UINT32_MAX;
+    in.controller_error = 1;
+    in.u = NAN;
+    in.barrier_run = UINT32_MAX;
+    check(PMA_FAULT_NONE);
+    in.bus_off = 1;
+    check(PMA_FAULT_CAN_BUS_OFF);
+}
+
+/* ARMED: sensor, position and overrun checks, but not the RUNNING ones. */
+static void test_supervisor_armed_skips_running_checks(void **state)
+{
+    (void)state;
+    in.running = 0;
+    in.ticks_since_host_heartbeat = UINT32_MAX;
+    in.controller_error = 1;
+    in.u = NAN;
+    in.barrier_run = UINT32_MAX;
+    check(PMA_FAULT_NONE);
+    in.late_ticks = 3;
+    check(PMA_FAULT_TICK_OVERRUN);
+    in.x_cm = 1.0f;
+    check(PMA_FAULT_POSITION_LIMIT);
+    in.sensor_status = PMA_ERR_RANGE;
+    check(PMA_FAULT_SENSOR_RANGE);
+}
+
+/* The order of supervisor.h: bus-off (every state); then while active: no
+ * new sample (plant bridge), sensor wire break, out of range, read error,
+ * position, tick overrun; then while RUNNING: host heartbeat, controller
+ * error, non-finite output, barrier. Everything wrong at once, then the
+ * winner removed one by one. */
+static void test_supervisor_priority(void **state)
+{
+    (void)state;
+    in.bus_off = 1;
+    in.ticks_since_sample = 10;
+    in.sensor_status = PMA_ERR_WIRE_BREAK;
+    in.x_cm = 5.0f;
+    in.late_ticks = 10;
+    in.ticks_since_host_heartbeat = 1000;
+    in.controller_error = 1;
+    in.u = NAN;
+    in.barrier_run = 1000;
+    check(PMA_FAULT_CAN_BUS_OFF);
+    in.bus_off = 0;
+    check(PMA_FAULT_SENSOR_TIMEOUT);
+    in.sensor_status = PMA_ERR_RANGE;
+    check(PMA_FAULT_SENSOR_TIMEOUT);
+    in.ticks_since_sample = 9;
+    check(PMA_FAULT_SENSOR_RANGE);
+    in.sensor_status = PMA_ERR_WIRE_BREAK;
+    check(PMA_FAULT_SENSOR_WIRE_BREAK);
+    in.sensor_status = PMA_ERR_IO;
+    check(PMA_FAULT_SENSOR_READ);
+    in.sensor_status = PMA_OK;
+    check(PMA_FAULT_POSITION_LIMIT);
+    in.x_cm = NAN; /* a NaN position is a position fault, before the rest */
+    check(PMA_FAULT_POSITION_LIMIT);
+    in.x_cm = -1.0f;
+    check(PMA_FAULT_TICK_OVERRUN);
+    in.late_ticks = 0;
+    check(PMA_FAULT_HOST_HEARTBEAT_LOST);
+    in.ticks_since_host_heartbeat = 0;
+    check(PMA_FAULT_CONTROLLER);
+    in.controller_error = 0;
+    check(PMA_FAULT_NOT_FINITE);
+    in.u = 0.0f;
+    check(PMA_FAULT_BARRIER);
+    in.barrier_run = 0;
+    check(PMA_FAULT_NONE);
+}
+
+static void test_fault_names(void **state)
+{
+    (void)state;
+    assert_string_equal(pma_fault_name(PMA_FAULT_NONE), "NONE");
+    assert_string_equal(pma_fault_name(PMA_FAULT_SENSOR_WIRE_BREAK), "SENSOR_WIRE_BREAK");
+    assert_string_equal(pma_fault_name(PMA_FAULT_OUTPUT), "OUTPUT");
+    assert_string_equal(pma_fault_name(PMA_FAULT_INIT), "INIT");
+    assert_string_equal(pma_fault_name(PMA_FAULT_INIT + 1), "UNKNOWN");
+    assert_string_equal(pma_fault_name(-1), "UNKNOWN");
+    /* the names are the DBC's FaultCode values */
+    assert_int_equal(PMA_FAULT_WATCHDOG_RESET, PMA_PROTO_HEARTBEAT_FAULT_CODE_WATCHDOG_RESET_CHOICE);
+    assert_int_equal(PMA_FAULT_OUTPUT, PMA_PROTO_HEARTBEAT_FAULT_CODE_OUTPUT_CHOICE);
+    assert_int_equal(PMA_FAULT_INIT, PMA_PROTO_HEARTBEAT_FAULT_CODE_INIT_CHOICE);
+    assert_int_equal(PMA_FAULT_BARRIER, PMA_PROTO_HEARTBEAT_FAULT_CODE_BARRIER_CHOICE);
+}
+
+/* -------------------------------------------------------------- actuator -- */
+
+static pma_actuator_config_t ac;
+
+static int setup_actuator(void **state)
+{
+    (void)state;
+    ac = (pma_actuator_config_t){
+        .p0_kpa = 300.0f, .kpa_per_u = 1.0f, .polarity = 1, .p_min_kpa = 0.0f,
+        .p_max_kpa = 600.0f, .slew_kpa_s = 0.0f, .safe_mode = PMA_SAFE_VENT, .safe_kpa = 0.0f,
+    };
+    return 0;
+}
+
+static void test_actuator_validate(void **state)
+{
+    (void)state;
+    const pma_actuator_config_t good = ac;
+    assert_status(pma_actuator_validate(&ac), PMA_OK);
+    assert_status(pma_actuator_validate(NULL), PMA_ERR_NULL);
+
+    ac.polarity = -1;
+    assert_status(pma_actuator_validate(&ac), PMA_OK);
+    ac.polarity = 0;
+    assert_status(pma_actuator_validate(&ac), PMA_ERR_RANGE);
+    ac.polarity = 2;
+    assert_status(pma_actuator_validate(&ac), PMA_ERR_RANGE);
+    ac = good;
+    ac.p_min_kpa = 600.0f; /* p_min >= p_max */
+    assert_status(pma_actuator_validate(&ac), PMA_ERR_RANGE);
+    ac = good;
+    ac.p_min_kpa = -1.0f;
+    assert_status(pma_actuator_validate(&ac), PMA_ERR_RANGE);
+    ac = good;
+    ac.p0_kpa = 601.0f;   /* p0 outside [p_min, p_max] */
+    assert_status(pma_actuator_validate(&ac), PMA_ERR_RANGE);
+    ac.p0_kpa = 600.0f;   /* the edge is inside */
+    assert_status(pma_actuator_validate(&ac), PMA_OK);
+    ac = good;
+    ac.p_min_kpa = 100.0f;
+    ac.p0_kpa = 99.0f;
+    assert_status(pma_actuator_validate(&ac), PMA_ERR_RANGE);
+    ac = good;
+    ac.kpa_per_u = 0.0f;
+    assert_status(pma_actuator_validate(&ac), PMA_ERR_RANGE);
+    ac = good;
+    ac.slew_kpa_s = -1.0f;
+    assert_status(pma_actuator_validate(&ac), PMA_ERR_RANGE);
+    ac = good;
+    ac.safe_mode = 3;
+    assert_status(pma_actuator_validate(&ac), PMA_ERR_RANGE);
+    ac = good;
+    ac.safe_mode = PMA_SAFE_FIXED;
+    ac.safe_kpa = 600.0f;
+    assert_status(pma_actuator_validate(&ac), PMA_OK);
+    ac.safe_kpa = 600.5f;  /* FIXED above p_max */
+    assert_status(pma_actuator_validate(&ac), PMA_ERR_RANGE);
+    ac.safe_mode = PMA_SAFE_VENT; /* safe_kpa only matters for FIXED */
+    assert_status(pma_actuator_validate(&ac), PMA_OK);
+    /* non-finite fields */
+    float *fields[] = {&ac.p0_kpa, &ac.kpa_per_u, &ac.p_min_kpa, &ac.p_max_kpa, &ac.slew_kpa_s,
+                       &ac.safe_kpa};
+    for (size_t i = 0; i < sizeof fields / sizeof fields[0]; ++i) {
+        ac = good;
+        *fields[i] = NAN;
+        assert_status(pma_actuator_validate(&ac), PMA_ERR_NOT_FINITE);
+        *fields[i] = INFINITY;
+        assert_status(pma_actuator_validate(&ac), PMA_ERR_NOT_FINITE);
+    }
+}
+
+static void test_actuator_law_clamp_polarity(void **state)
+{
+    (void)state;
+    /* no slew limit: p = p0 + polarity * kpa_per_u * u, clamped */
+    assert_near(pma_actuator_active_kpa(&ac, 0.0f, 0.0f, 1e-3f), 300.0f, 0.0f);
+    assert_near(pma_actuator_active_kpa(&ac, 25.0f, 0.0f, 1e-3f), 325.0f, 1e-4);
+    assert_near(pma_actuator_active_kpa(&ac, -100.0f, 0.0f, 1e-3f), 200.0f, 1e-4);
+    assert_near(pma_actuator_active_kpa(&ac, 400.0f, 0.0f, 1e-3f), 600.0f, 0.0f); /* p_max */
+    assert_near(pma_actuator_active_kpa(&ac, -400.0f, 0.0f, 1e-3f), 0.0f, 0.0f);  /* p_min */
+    assert_near(pma_actuator_active_kpa(&ac, 1e30f, 0.0f, 1e-3f), 600.0f, 0.0f);
+    ac.kpa_per_u = 2.0f;
+    assert_near(pma_actuator_active_kpa(&ac, 25.0f, 0.0f, 1e-3f), 350.0f, 1e-4);
+    ac.polarity = -1;
+    assert_near(pma_actuator_active_kpa(&ac, 25.0f, 0.0f, 1e-3f), 250.0f, 1e-4);
+    assert_near(pma_actuator_active_kpa(&ac, -25.0f, 0.0f, 1e-3f), 350.0f, 1e-4);
+    assert_near(pma_actuator_active_kpa(&ac, 400.0f, 0.0f, 1e-3f), 0.0f, 0.0f);
+    ac.p_min_kpa = 50.0f;
+    ac.p_max_kpa = 500.0f;
+    assert_near(pma_actuator_active_kpa(&ac, 400.0f, 0.0f, 1e-3f), 50.0f, 0.0f);
+    assert_near(pma_actuator_active_kpa(&ac, -400.0f, 0.0f, 1e-3f), 500.0f, 0.0f);
+}
+
+static void test_actuator_slew_limit(void **state)
+{
+    (void)state;
+    ac.slew_kpa_s = 20000.0f; /* 20 kPa per 1 ms tick */
+    float p = 0.0f;
+    /* from the vented state up to p0: 15 ticks of 20 kPa */
+    for (int k = 1; k <= 15; ++k) {
+        p = pma_actuator_active_kpa(&ac, 0.0f, p, 1e-3f);
+        assert_near(p, 20.0f * (float)k, 1e-3);
+    }
+    p = pma_actuator_active_kpa(&ac, 0.0f, p, 1e-3f);
+    assert_near(p, 300.0f, 1e-3);
+    /* down by at most 20 per tick, a small step at once */
+    assert_near(pma_actuator_active_kpa(&ac, -300.0f, 300.0f, 1e-3f), 280.0f, 1e-3);
+    assert_near(pma_actuator_active_kpa(&ac, 5.0f, 300.0f, 1e-3f), 305.0f, 1e-3);
+    /* the period scales it */
+    assert_near(pma_actuator_active_kpa(&ac, 300.0f, 300.0f, 2e-3f), 340.0f, 1e-3);
+    /* 0: no limit */
+    ac.slew_kpa_s = 0.0f;
+    assert_near(pma_actuator_active_kpa(&ac, 300.0f, 0.0f, 1e-3f), 600.0f, 0.0f);
+}
+
+static void test_actuator_safe_modes(void **state)
+{
+    (void)state;
+    ac.slew_kpa_s = 10.0f; /* the safe state ignores the slew limit */
+    ac.safe_mode = PMA_SAFE_VENT;
+    assert_true(pma_actuator_safe_kpa(&ac, 450.0f) == 0.0f);
+    ac.safe_mode = PMA_SAFE_HOLD;
+    assert_true(pma_actuator_safe_kpa(&ac, 450.0f) == 450.0f);
+    assert_true(pma_actuator_safe_kpa(&ac, 0.0f) == 0.0f);
+    assert_true(pma_actuator_safe_kpa(&ac, NAN) == 0.0f);
+    assert_true(pma_actuator_safe_kpa(&ac, INFINITY) == 0.0f);
+    assert_true(pma_actuator_safe_kpa(&ac, -5.0f) == 0.0f);
+    ac.safe_mode = PMA_SAFE_FIXED;
+    ac.safe_kpa = 120.0f;
+    assert_true(pma_actuator_safe_kpa(&ac, 450.0f) == 120.0f);
+    assert_true(pma_actuator_safe_kpa(&ac, NAN) == 120.0f);
+}
+
+/* Non-finite u or previous pressure: the safe pressure, never NaN. */
+static void test_actuator_non_finite(void **state)
+{
+    (void)state;
+    ac.slew_kpa_s = 20000.0f;
+    const float bad[] = {NAN, INFINITY, -INFINITY};
+    for (size_t i = 0; i < 3; ++i) {
+        ac.safe_mode = PMA_SAFE_VENT;
+        assert_true(pma_actuator_active_kpa(&ac, bad[i], 300.0f, 1e-3f) == 0.0f);
+        assert_true(pma_actuator_active_kpa(&ac, 0.0f, bad[i], 1e-3f) == 0.0f);
+        ac.safe_mode = PMA_SAFE_FIXED;
+        ac.safe_kpa = 80.0f;
+        assert_true(pma_actuator_active_kpa(&ac, bad[i], 300.0f, 1e-3f) == 80.0f);
+        assert_true(pma_actuator_active_kpa(&ac, 0.0f, bad[i], 1e-3f) == 80.0f);
+        ac.safe_mode = PMA_SAFE_HOLD;  /* no previous value to hold: vent */
+        assert_true(pma_actuator_active_kpa(&ac, 0.0f, bad[i], 1e-3f) == 0.0f);
+        /* (HOLD with a non-finite u and a finite previous value: test_app_bugs.c) */
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test_setup(test_supervisor_nothing_wrong, setup_supervisor),
+        cmocka_unit_test_setup(test_supervisor_each_condition, setup_supervisor),
+        cmocka_unit_test_setup(test_supervisor_nan_position_trips, setup_supervisor),
+        cmocka_unit_test_setup(test_supervisor_inactive_only_bus_off, setup_supervisor),
+        cmocka_unit_test_setup(test_supervisor_armed_skips_running_checks, setup_supervisor),
+        cmocka_unit_test_setup(test_supervisor_priority, setup_supervisor),
+        cmocka_unit_test(test_fault_names),
+        cmocka_unit_test_setup(test_actuator_validate, setup_actuator),
+        cmocka_unit_test_setup(test_actuator_law_clamp_polarity, setup_actuator),
+        cmocka_unit_test_setup(test_actuator_slew_limit, setup_actuator),
+        cmocka_unit_test_setup(test_actuator_safe_modes, setup_actuator),
+        cmocka_unit_test_setup(test_actuator_non_finite, setup_actuator),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
