@@ -8,6 +8,7 @@
 
 #include "actuator.h"
 #include "app_internal.h"
+#include "generated/pma_proto.h"
 
 _Static_assert(PMA_PARAMS_BLOB_BYTES <= PMA_PSTORE_MAX_BLOB_BYTES,
                "the parameter blob must fit a storage record");
@@ -106,8 +107,14 @@ static int check_cross_params(const pma_params_t *p)
 int pma_app_apply_timing(pma_app_t *app)
 {
     const uint32_t hz = app->params.sys_tick_hz;
-    app->period_us = (1000000u + hz / 2u) / hz;
+    const uint32_t period_us = (1000000u + hz / 2u) / hz;
     app->period_s = 1.0f / (float)hz;
+    /* the heartbeat period may have changed too (RESTORE_DEFAULTS, LOAD):
+     * the next one no later than one new period from now */
+    const uint64_t next_hb = pma_hal_time_us() + 1000u * (uint64_t)app->params.sys_heartbeat_ms;
+    if (next_hb < app->next_heartbeat_us) app->next_heartbeat_us = next_hb;
+    if (app->tick_started && period_us == app->period_us) return PMA_OK; /* unchanged: keep it */
+    app->period_us = period_us;
     int rc = pma_hal_tick_start(app->period_us);
     app->tick_started = (uint8_t)(rc == PMA_OK);
     return rc;
@@ -456,8 +463,12 @@ int pma_app_step(pma_app_t *app)
     uint32_t late = 0;
     const int rc = pma_hal_tick_wait(&late);
     pma_can_frame_t f;
+    const uint16_t sample_id = (uint16_t)(PMA_PROTO_PLANT_SENSOR_FRAME_ID | app->node_id);
     for (unsigned i = 0; i < PMA_APP_RX_PER_STEP && pma_hal_can_recv(&f) == PMA_OK; ++i) {
         pma_app_handle_frame(app, &f);
+        /* lockstep: each sample is its own tick; later frames (perhaps the
+         * next sample) wait for the next iteration, which the port grants */
+        if (app->plat.lockstep && f.id == sample_id && f.dlc == PMA_PROTO_PLANT_SENSOR_LENGTH) break;
     }
     if (rc == PMA_OK) pma_app_tick(app, late);
     pma_app_poll(app);

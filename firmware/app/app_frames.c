@@ -266,10 +266,8 @@ static void on_param_req(pma_app_t *app, const pma_can_frame_t *f)
             }
             if (rc == PMA_OK) {
                 app->params_changed = 1;
-                if (id == PMA_PARAM_SYS_TICK_HZ) rc = pma_app_apply_timing(app);
-                if (id == PMA_PARAM_SYS_HEARTBEAT_MS) { /* the new period from now on */
-                    const uint64_t next = pma_hal_time_us() + 1000u * (uint64_t)nv.u32;
-                    if (next < app->next_heartbeat_us) app->next_heartbeat_us = next;
+                if (id == PMA_PARAM_SYS_TICK_HZ || id == PMA_PARAM_SYS_HEARTBEAT_MS) {
+                    rc = pma_app_apply_timing(app); /* the new periods from now on */
                 }
             }
         }

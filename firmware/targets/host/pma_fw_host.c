@@ -153,6 +153,14 @@ int main(int argc, char **argv)
     options_t o;
     if (!parse_options(argc, argv, &o)) return EXIT_USAGE;
 
+    /* first: a stop request during start-up must end the program cleanly too */
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, NULL);
+    sigaction(SIGTERM, &sa, NULL);
+
     pma_hal_linux_config_t lc = PMA_HAL_LINUX_CONFIG_INIT;
     lc.can_ifname = o.can;
     lc.storage_path = o.storage;
@@ -193,13 +201,6 @@ int main(int argc, char **argv)
     fprintf(stderr, "pma-fw-host: node %u on %s, %s, %u Hz, parameters %s%s\n", app.node_id, o.can,
             o.lockstep ? "lockstep" : "real time", (unsigned)app.params.sys_tick_hz,
             app.params_default ? "defaults" : "loaded from ", app.params_default ? "" : o.storage);
-
-    struct sigaction sa;
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_signal;
-    sigemptyset(&sa.sa_mask);
-    sigaction(SIGINT, &sa, NULL);
-    sigaction(SIGTERM, &sa, NULL);
 
     uint8_t last_state = app.state, last_fault = app.fault;
     if (o.verbose) fprintf(stderr, "pma-fw-host: state %s\n", pma_app_state_name(app.state));

@@ -309,6 +309,10 @@ void pma_linux_can_close(void)
 
 void pma_linux_can_tick_arm(void)
 {
+    /* Already armed (the tick restarted with a new period): the frames in the
+     * ring were counted when they arrived; counting them again would grant
+     * ticks twice. */
+    if (can.tick_armed) return;
     /* Tick frames the application has not received yet count too: the
      * simulator may have sent the first sample before the tick started
      * (and it then waits for the reply to it). */
