@@ -17,7 +17,7 @@ for p in host cortex-m4f cortex-m3 cortex-m0; do
   ctest --preset "$p" -j2
 done
 echo "== pytest (no CAN)"
-.venv/bin/python -m pytest -q tests/golden tests/protocol
+.venv/bin/python -m pytest -q tests/golden tests/protocol hil/tests/test_rig.py
 echo "== hil/with-vcan"
 bash hil/tests/test_with_vcan.sh
 echo "== integration tests over vcan (pma-fw-host, python-can, can-utils)"

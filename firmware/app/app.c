@@ -353,14 +353,19 @@ static void write_output(pma_app_t *app)
     } else {
         rc = pma_hal_dac_write(app->dac_counts);
     }
-    if (rc != PMA_OK && !app->plat.plant_bridge && output_active(app)) {
+    if (rc != PMA_OK && !app->plat.plant_bridge) {
+        /* the DAC refused the value (or failed): never leave an earlier,
+         * perhaps active, command on the output. Try the safe value, and if
+         * the DAC refuses that too, 0 counts (0 V / 0 mA: a regulator's
+         * minimum pressure). */
         pma_app_raise_fault(app, PMA_FAULT_OUTPUT);
-        /* the DAC failed: nothing more can be done from here but try the safe value */
         app->p_kpa = pma_actuator_safe_kpa(&ac, app->p_kpa);
-        if (pma_dac_kpa_to_counts(&ds, app->p_kpa, &counts) == PMA_OK) {
-            app->dac_counts = counts;
+        if (pma_dac_kpa_to_counts(&ds, app->p_kpa, &counts) != PMA_OK ||
+            pma_hal_dac_write(counts) != PMA_OK) {
+            counts = 0;
             (void)pma_hal_dac_write(counts);
         }
+        app->dac_counts = counts;
     }
 }
 

@@ -31,7 +31,7 @@ typedef enum pma_fault {
     PMA_FAULT_CAN_BUS_OFF = 11,        /* the CAN controller went bus-off */
     PMA_FAULT_CONTROLLER = 12,         /* a controller step returned an error */
     PMA_FAULT_WATCHDOG_RESET = 13,     /* the program was restarted by the watchdog */
-    PMA_FAULT_OUTPUT = 14,             /* the DAC could not be written (board; in the plant-bridge
+    PMA_FAULT_OUTPUT = 14,             /* the DAC refused or failed a write (board; in the plant-bridge
                                           mode a PLANT_ACTUATOR frame that cannot be queued is
                                           counted, and the rig times out) */
     PMA_FAULT_INIT = 15,               /* start-up failed (CAN filters or the tick could not be set) */

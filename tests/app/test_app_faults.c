@@ -379,20 +379,27 @@ static void test_barrier(void **state)
 static void test_dac_failure(void **state)
 {
     (void)state;
+    /* dac.max_counts cannot exceed the 12-bit DAC (the table's range) */
     to_idle(0);
-    set_u32(PMA_PARAM_DAC_MAX_COUNTS, 65535);
-    set_f32(PMA_PARAM_ACT_P_MAX_KPA, 1000.0f);
-    set_f32(PMA_PARAM_ACT_P0_KPA, 950.0f); /* 4322 counts */
+    assert_status(set_param(PMA_PARAM_DAC_MAX_COUNTS, vu(4096)), PMA_ERR_RANGE);
+    /* a converter that fails while ARMED: OUTPUT fault in that tick; once it
+     * works again the safe value (VENT: 0 counts) is what it gets */
     command_ok(PMA_CMD_ARM, 0, PMA_OK);
-    uint32_t t = 0;
-    while (app.state == PMA_STATE_ARMED && t < 100) {
-        step();
-        ++t;
-    }
+    steps(20);
+    assert_true(dac_now() > 0);
+    pma_fake_dac_fail(true);
+    step();
     assert_state(app.state, PMA_STATE_FAULT);
     assert_fault(app.fault, PMA_FAULT_OUTPUT);
-    assert_int_equal(dac_now(), 0); /* the safe value went out */
-    assert_true(t > 40); /* the slew limit first walks up to the DAC's end */
+    pma_fake_dac_fail(false);
+    step();
+    assert_int_equal(dac_now(), 0);
+    /* a failing DAC while IDLE is reported too (the safe value may not be out) */
+    command_ok(PMA_CMD_CLEAR_FAULTS, 0, PMA_OK);
+    pma_fake_dac_fail(true);
+    step();
+    assert_fault(app.fault, PMA_FAULT_OUTPUT);
+    pma_fake_dac_fail(false);
 }
 
 /* -------------------------------------------------------------- bus-off -- */

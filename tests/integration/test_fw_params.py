@@ -99,7 +99,7 @@ PREREQ = {
     ("adc.raw_min_counts", "max"): [("adc.raw_max_counts", 65535)],
     ("adc.raw_max_counts", "min"): [("adc.wire_break_below_counts", 0), ("adc.raw_min_counts", 0)],
     ("adc.wire_break_below_counts", "max"): [("adc.raw_max_counts", 65535), ("adc.raw_min_counts", 65535)],
-    ("dac.min_counts", "max"): [("dac.max_counts", 65535)],
+    ("dac.min_counts", "max"): [],  # dac.max_counts is already at its maximum, 4095
     ("dac.max_counts", "min"): [("dac.min_counts", 0)],
 }
 

@@ -22,6 +22,7 @@ static struct {
 static struct {
     pma_fake_dac_write_t log[PMA_FAKE_DAC_LOG_DEPTH]; /* ring, newest at (count - 1) % depth */
     uint32_t count;
+    bool fail;                   /* injected: every write fails with PMA_ERR_IO */
 } dac;
 
 void pma_fake_adc_dac_reset_(pma_fake_reset_depth_t depth)
@@ -33,6 +34,12 @@ void pma_fake_adc_dac_reset_(pma_fake_reset_depth_t depth)
     adc.fault = ADC_OK;
     adc.reads = 0;
     dac.count = 0;
+    dac.fail = false;
+}
+
+void pma_fake_dac_fail(bool fail)
+{
+    dac.fail = fail;
 }
 
 int pma_hal_adc_read(uint16_t *raw_counts)
@@ -94,6 +101,7 @@ uint32_t pma_fake_adc_read_count(void)
 int pma_hal_dac_write(uint16_t counts)
 {
     if (!pma_fake_initialised()) return PMA_ERR_NOT_READY;
+    if (dac.fail) return PMA_ERR_IO;
     if (counts > PMA_FAKE_DAC_MAX_COUNTS) return PMA_ERR_RANGE;
     dac.log[dac.count % PMA_FAKE_DAC_LOG_DEPTH] =
         (pma_fake_dac_write_t){.time_us = pma_hal_time_us(), .counts = counts};

@@ -95,6 +95,9 @@ typedef struct pma_fake_dac_write {
 } pma_fake_dac_write_t;
 
 uint32_t pma_fake_dac_write_count(void); /* accepted writes since reset */
+/* Fault: while true every pma_hal_dac_write() fails with PMA_ERR_IO and
+ * changes nothing (a broken converter); cleared by pma_fake_reset(). */
+void pma_fake_dac_fail(bool fail);
 /* Write number `age` back from the newest (0: the newest). PMA_ERR_EMPTY when
  * nothing was written, PMA_ERR_RANGE when older than kept or than written. */
 int pma_fake_dac_log(uint32_t age, pma_fake_dac_write_t *w);

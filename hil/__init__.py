@@ -1,0 +1,1 @@
+"""Simulated PMA rig for the HIL harness (see docs/rig.md)."""
