@@ -22,3 +22,5 @@ echo "== hil/with-vcan"
 bash hil/tests/test_with_vcan.sh
 echo "== integration tests over vcan (pma-fw-host, python-can, can-utils)"
 hil/with-vcan .venv/bin/python -m pytest -q tests/integration
+echo "== fuzz (libFuzzer on the CAN frame handler, ASan + UBSan, 60 s)"
+bash tools/fuzz.sh 60
