@@ -20,7 +20,9 @@ echo "== pytest (no CAN)"
 .venv/bin/python -m pytest -q tests/golden tests/protocol hil/tests/test_rig.py
 echo "== hil/with-vcan"
 bash hil/tests/test_with_vcan.sh
-echo "== integration tests over vcan (pma-fw-host, python-can, can-utils)"
-hil/with-vcan .venv/bin/python -m pytest -q tests/integration
+echo "== pmactl unit tests (python-can virtual bus, no CAN)"
+.venv/bin/python -m pytest -q host/tests --ignore=host/tests/integration
+echo "== integration tests over vcan (pma-fw-host, python-can, can-utils, pmactl)"
+hil/with-vcan .venv/bin/python -m pytest -q tests/integration host/tests/integration
 echo "== fuzz (libFuzzer on the CAN frame handler, ASan + UBSan, 60 s)"
 bash tools/fuzz.sh 60

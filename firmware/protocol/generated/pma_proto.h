@@ -763,7 +763,7 @@ struct pma_proto_telem_c_t {
 /**
  * Signals in message TELEM_D.
  *
- * Telemetry 4 of 5: controller internals. PPC: lambda1 (cm), lambda2 (cm/s); MFAC: phi (input unit/cm), u(k-1); PID: integral term, derivative term; others: 0.
+ * Telemetry 4 of 5: controller internals. PPC: lambda1 (cm), lambda2 (cm/s); MFAC: phi (cm/input unit), u(k-1); PID: integral term, derivative term; others: 0.
  *
  * All signal values are as on the CAN bus.
  */

@@ -2,10 +2,16 @@
 
 The protocol comes from the firmware's own single sources of truth, shipped with
 the package: the DBC (``data/pma_proto.dbc``) and the parameter table
-(``data/params.toml``).
+(``data/params.toml``). The client (pmactl.client.PmaNode) serves the command line
+(pmactl.cli), the HIL harness and the tests.
 """
-from pmactl.client import Ack, CommandError, NoReply, PmaNode, PmaError
+from pmactl.client import (Ack, BusMonitor, CommandError, InterfaceError, LoadReport, MonitorEvent,
+                           NodeStateError, NoReply, ParamInfo, PmaError, PmaNode, RecordSummary,
+                           SetRejected, Status, TelemetryGrouper, TelemetryRecorder, TelemetryRow,
+                           bus_config, open_bus, scan)
 from pmactl.protocol import Param, Protocol, load_protocol
 
-__all__ = ["Ack", "CommandError", "NoReply", "Param", "PmaError", "PmaNode", "Protocol",
-           "load_protocol"]
+__all__ = ["Ack", "BusMonitor", "CommandError", "InterfaceError", "LoadReport", "MonitorEvent",
+           "NodeStateError", "NoReply", "Param", "ParamInfo", "PmaError", "PmaNode", "Protocol",
+           "RecordSummary", "SetRejected", "Status", "TelemetryGrouper", "TelemetryRecorder",
+           "TelemetryRow", "bus_config", "load_protocol", "open_bus", "scan"]

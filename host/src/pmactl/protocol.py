@@ -5,7 +5,9 @@ Frame id = base id + node id (node 0..15); the DBC lists the base ids (node 0).
 from __future__ import annotations
 
 import functools
+import math
 import os
+import struct
 import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
@@ -18,6 +20,53 @@ import cantools.database
 NODE_ID_MASK = 0x00F
 BASE_ID_MASK = 0x7F0
 NODE_COUNT = 16
+
+# HEARTBEAT Flags bits (firmware/app/app.h PMA_HB_*, docs/protocol.md "Heartbeat flags");
+# the DBC has them only in a comment. host/tests check this table against app.h.
+HEARTBEAT_FLAGS: dict[int, str] = {
+    0: "OUTPUT_ACTIVE", 1: "PLANT_BRIDGE", 2: "LOCKSTEP", 3: "PARAMS_CHANGED",
+    4: "PARAMS_DEFAULT", 5: "CAN_PASSIVE", 6: "SENSOR_VALID", 7: "REF_ACTIVE",
+    8: "SAVE_FAILED",
+}
+
+# One line on what each Result (the DBC's VAL_ table of COMMAND_ACK/PARAM_RESP) means on
+# the bus (docs/protocol.md "Result codes"), keyed by the DBC's name: the codes and names
+# always come from the DBC. host/tests check that every DBC name has a line here.
+RESULT_MEANINGS: dict[str, str] = {
+    "OK": "done",
+    "NULL": "internal error (a missing argument)",
+    "NOT_FINITE": "a value is NaN or infinite",
+    "RANGE": "a value outside its range (a parameter, an argument, a rule between "
+             "parameters, or the position at ARM)",
+    "BAND": "the reference (with w1 for PPC) leaves the constraint band "
+            "safety.x_min_cm..safety.x_max_cm within ref.horizon_s",
+    "NOT_READY": "no position yet (no sensor sample received)",
+    "UNSUPPORTED": "a valid value this build does not provide",
+    "FIXED_RANGE": "a value not representable in the fixed-point format",
+    "NOT_IMPLEMENTED": "not available on this node (e.g. SAVE/LOAD without parameter storage)",
+    "EMPTY": "no parameter after this id",
+    "FULL": "a queue was full",
+    "BUS_OFF": "the CAN controller is still bus-off",
+    "IO": "device I/O failed (e.g. the parameter storage)",
+    "NOT_ERASED": "storage: programming over data that is not erased",
+    "WIRE_BREAK": "the last sensor sample is at the wire-break level",
+    "NO_RECORD": "the storage holds no valid parameter record",
+    "VERIFY": "storage read-back differed (worn flash); the previous record stays",
+    "CORRUPT": "stored data failed the integrity check",
+    "UNKNOWN_ID": "no parameter with this id",
+    "TYPE": "the value's type is not the parameter's",
+    "STATE": "not allowed in the node's current state (see the parameter's access class)",
+    "UNKNOWN_COMMAND": "unknown command or operation",
+    "LENGTH": "frame with the wrong data length",
+    "FAULT": "refused because a fault is latched: clear it first",
+}
+
+TELEM_FRAMES = ("TELEM_A", "TELEM_B", "TELEM_C", "TELEM_D", "TELEM_E")
+
+
+def to_f32(x: float) -> float:
+    """x rounded to IEEE 754 single precision, as the node stores an f32 parameter."""
+    return float(struct.unpack("<f", struct.pack("<f", x))[0])
 
 
 @dataclass(frozen=True)
@@ -35,13 +84,71 @@ class Param:
     values: dict[int, str] = field(default_factory=dict)
 
     def parse(self, text: str) -> float | int:
-        """A value from user text: a number, or an enumeration value's name."""
+        """A value from user text: a number, or an enumeration value's name.
+
+        ValueError with a message naming the parameter when the text is neither."""
+        t = text.strip()
         for k, v in self.values.items():
-            if text.strip().upper() == v:
+            if t.upper() == v:
                 return k
+        try:
+            if self.type == "f32":
+                return float(t)
+            try:
+                return int(t, 0)
+            except ValueError:
+                f = float(t)            # "3.0" or "1e3" for an integer parameter
+                if not f.is_integer():
+                    raise
+                return int(f)
+        except ValueError:
+            raise ValueError(f"{self.name}: {text!r} is not {self.expects()}") from None
+
+    def expects(self) -> str:
+        """What a value of this parameter is, in words (for error messages)."""
+        what = {"f32": "a number", "u32": "an unsigned integer", "i32": "an integer"}[self.type]
+        if self.values:
+            what = "one of " + ", ".join(self.values.values()) + f" (or {what})"
+        return what
+
+    def check(self, value: object) -> float | int:
+        """The value, validated against the table (type, finite, min..max, enumeration):
+        a float for f32 parameters, an int otherwise. Names of enumeration values and
+        numeric strings are accepted. ValueError with a clear message otherwise."""
+        if isinstance(value, str):
+            value = self.parse(value)
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ValueError(f"{self.name}: {value!r} is not {self.expects()}")
+        if not math.isfinite(value):
+            raise ValueError(f"{self.name}: {value} is not finite")
         if self.type == "f32":
-            return float(text)
-        return int(text, 0)
+            v: float | int = float(value)
+        else:
+            if isinstance(value, float) and not value.is_integer():
+                raise ValueError(f"{self.name}: {value} is not {self.expects()}")
+            v = int(value)
+        if not self.min <= v <= self.max:
+            unit = f" {self.unit}" if self.unit else ""
+            raise ValueError(f"{self.name}: {self.text(v)}{unit} is outside "
+                             f"{self.text(self.min)}..{self.text(self.max)}{unit}")
+        if self.values and int(v) not in self.values:
+            raise ValueError(f"{self.name}: {int(v)} is not {self.expects()}")
+        return v
+
+    def text(self, value: float | int) -> str:
+        """A value as text: the name of an enumeration value, else the number
+        (f32 with 7 significant digits, the precision it has on the node)."""
+        if self.values and float(value).is_integer() and int(value) in self.values:
+            return self.values[int(value)]
+        if self.type == "f32":
+            return f"{float(value):.7g}"
+        return str(int(value))
+
+    def same(self, a: float | int, b: float | int) -> bool:
+        """Whether two values are the same on the node (f32: after rounding to single)."""
+        if self.type == "f32":
+            return to_f32(float(a)) == to_f32(float(b))
+        return int(a) == int(b)
 
 
 def _data_file(name: str, env: str) -> Path:
@@ -108,6 +215,21 @@ class Protocol:
 
     def status_name(self, code: int) -> str:
         return self.status_names.get(code, f"status {code}")
+
+    def status_text(self, code: int) -> str:
+        """'NAME (code): meaning' of a Result code."""
+        name = self.status_name(code)
+        meaning = RESULT_MEANINGS.get(name)
+        return f"{name} ({code})" + (f": {meaning}" if meaning else "")
+
+    def enum_names(self, msg: str, sig: str) -> dict[int, str]:
+        """The VAL_ table of a signal (value -> name)."""
+        return self._choices(msg, sig)
+
+    @staticmethod
+    def flag_names(flags: int) -> list[str]:
+        """Names of the HEARTBEAT Flags bits that are set (unknown bits as BIT<n>)."""
+        return [HEARTBEAT_FLAGS.get(b, f"BIT{b}") for b in range(16) if flags >> b & 1]
 
 
 @functools.cache

@@ -1,0 +1,735 @@
+"""pmactl: tune, command and watch PMA nodes over CAN (the command line; the protocol
+logic is in pmactl.client)."""
+from __future__ import annotations
+
+import argparse
+import difflib
+import fnmatch
+import json
+import logging
+import math
+import struct
+import sys
+import time
+from pathlib import Path
+from typing import Any, Callable, Sequence
+
+import can
+import cantools
+
+from pmactl import paramfile
+from pmactl.client import (NODE_REPLIES, CommandError, InterfaceError, MonitorEvent, BusMonitor, NodeStateError,
+                           NoReply, ParamInfo, PmaError, PmaNode, RecordProgress, SetRejected,
+                           Status, TelemetryRecorder, bus_config, describe_bus, open_bus, scan)
+from pmactl.protocol import Param, Protocol, load_protocol
+from pmactl.recording import RecordingError, metrics, read_recording
+
+EXIT_OK = 0
+EXIT_REFUSED = 1        # the node refused (a command, a parameter set) or cannot do it now
+EXIT_USAGE = 2          # bad command line or bad value: nothing was sent
+EXIT_INTERFACE = 3      # the CAN interface could not be opened or failed
+EXIT_NO_REPLY = 4       # no reply (or no node, no telemetry) within the timeout
+EXIT_FILE = 5           # a file that cannot be read, parsed or validated: nothing was sent
+EXIT_INTERRUPTED = 130  # Ctrl-C (monitor and record end normally on Ctrl-C instead)
+
+EXIT_CODES_HELP = """\
+exit status:
+  0    success
+  1    the node refused: a command or parameter set answered with an error code
+       (printed with its name and meaning), or the node is not in a state to do it
+  2    bad command line or bad value (unknown parameter, out of range): nothing sent
+  3    the CAN interface could not be opened, or failed
+  4    no reply within --timeout (no such node, node not answering, no telemetry)
+  5    bad file (unreadable, not JSON/YAML/CSV, or an entry failing validation):
+       nothing sent
+  130  interrupted (Ctrl-C); monitor and record end normally on Ctrl-C
+
+The bus: --interface/--channel/--bitrate, else python-can's configuration (CAN_INTERFACE,
+CAN_CHANNEL, CAN_BITRATE, CAN_CONFIG, ~/.canrc, ...), else socketcan on vcan0.
+"""
+
+
+class UsageError(Exception):
+    """A bad value on the command line (exit 2)."""
+
+
+# ------------------------------------------------------------------ parser --
+def _common(p: argparse.ArgumentParser, suppress: bool) -> None:
+    d = argparse.SUPPRESS if suppress else None
+    g = p.add_argument_group("bus and node")
+    g.add_argument("--interface", "-i", default=d,
+                   help="python-can interface (socketcan, pcan, kvaser, slcan, virtual, ...); "
+                        "default: python-can's configuration, else socketcan")
+    g.add_argument("--channel", "-c", default=d,
+                   help="channel (vcan0, can0, PCAN_USBBUS1, ...); default: python-can's "
+                        "configuration, else vcan0 for socketcan")
+    g.add_argument("--bitrate", "-b", type=int, default=d,
+                   help="bit rate in bit/s for interfaces that set it (the protocol's is 1000000); "
+                        "default: python-can's configuration")
+    g.add_argument("--node", "-n", type=_node_id, default=argparse.SUPPRESS if suppress else 0,
+                   help="node id 0..15 (default 0)")
+    g.add_argument("--timeout", "-t", type=_positive, default=argparse.SUPPRESS if suppress else 1.0,
+                   help="seconds to wait for a reply (default 1.0)")
+    g.add_argument("--verbose", "-v", action="store_true", default=argparse.SUPPRESS if suppress else False,
+                   help="show python-can's own log messages (warnings from the interface driver)")
+
+
+def _node_id(text: str) -> int:
+    try:
+        v = int(text, 0)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"node id {text!r} is not a number") from None
+    if not 0 <= v <= 15:
+        raise argparse.ArgumentTypeError(f"node id {v} outside 0..15")
+    return v
+
+
+def _positive(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not (math.isfinite(v) and v > 0):
+        raise argparse.ArgumentTypeError(f"{text} is not a positive number of seconds")
+    return v
+
+
+def _count(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if v <= 0:
+        raise argparse.ArgumentTypeError(f"{v} is not positive")
+    return v
+
+
+def _finite(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not math.isfinite(v):
+        raise argparse.ArgumentTypeError(f"{text} is not finite")
+    return v
+
+
+def build_parser() -> argparse.ArgumentParser:
+    fmt = argparse.RawDescriptionHelpFormatter
+    parser = argparse.ArgumentParser(
+        prog="pmactl", formatter_class=fmt,
+        description="Tune, command and watch PMA controller nodes over CAN "
+                    "(protocol: firmware/protocol/pma_proto.dbc, parameters: docs/parameters.md).",
+        epilog=EXIT_CODES_HELP)
+    _common(parser, suppress=False)
+    common = argparse.ArgumentParser(add_help=False)
+    _common(common, suppress=True)
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+
+    def add(name: str, help_text: str, **kw: Any) -> argparse.ArgumentParser:
+        return sub.add_parser(name, help=help_text, description=help_text, parents=[common],
+                              formatter_class=fmt, epilog=EXIT_CODES_HELP, **kw)
+
+    p = add("scan", "list the nodes on the bus, from their heartbeats")
+    p.add_argument("--seconds", type=_positive, default=1.0, help="how long to listen (default 1.0 s)")
+
+    add("status", "the node's state, fault, flags, controller, reference and reset cause")
+
+    p = add("params", "read, write, save and restore parameters")
+    psub = p.add_subparsers(dest="params_command", metavar="ACTION", required=True)
+
+    def padd(name: str, help_text: str) -> argparse.ArgumentParser:
+        return psub.add_parser(name, help=help_text, description=help_text, parents=[common],
+                               formatter_class=fmt, epilog=EXIT_CODES_HELP)
+
+    q = padd("list", "every parameter with its value, unit, range, default and access, as the "
+                     "node reports them (* marks a value that differs from the default)")
+    q.add_argument("patterns", nargs="*", metavar="PATTERN",
+                   help="only names matching: a group (ppc), a glob (ppc.w*) or a name")
+    q = padd("get", "the value of parameters")
+    q.add_argument("names", nargs="+", metavar="NAME", help="parameter name (or id)")
+    q = padd("set", "set a parameter in the node's RAM (save to keep it)")
+    q.add_argument("name", metavar="NAME")
+    q.add_argument("value", metavar="VALUE", help="a number in the parameter's unit, or an "
+                                                  "enumeration value's name")
+    q.add_argument("--no-check", action="store_true",
+                   help="send without checking the value against the table (the node checks)")
+    padd("save", "write every parameter to the node's storage (output inactive only)")
+    padd("restore-defaults", "set every parameter to its default in RAM (save to keep them)")
+    padd("revert", "replace the parameters in RAM by the set saved in storage (LOAD)")
+    q = padd("dump", "write every parameter to a file (JSON; YAML with PyYAML; '-': stdout)")
+    q.add_argument("file", metavar="FILE")
+    q = padd("load", "set the parameters of a file; every entry is checked before any is sent")
+    q.add_argument("file", metavar="FILE")
+    q.add_argument("--dry-run", action="store_true", help="check the file and show what would change")
+    q.add_argument("--all", action="store_true",
+                   help="send every entry, also those the node already has")
+
+    for name, text in (("arm", "IDLE -> ARMED: the output holds the preset pressure"),
+                       ("disarm", "ARMED or RUNNING -> IDLE: the safe output"),
+                       ("start", "ARMED -> RUNNING: the selected controller tracks the reference"),
+                       ("stop", "RUNNING -> ARMED"),
+                       ("clear-faults", "FAULT -> IDLE: clear the latched fault")):
+        add(name, text)
+    p = add("estop", "emergency stop: the node (or with --all every node) enters FAULT")
+    p.add_argument("--all", action="store_true", help="ESTOP_ALL: every node on the bus")
+    p = add("controller", "select the controller run by the next START (no NAME: show it)")
+    p.add_argument("name", nargs="?", metavar="NAME", help="OFF, PPC, MFAC, PID or OPEN_LOOP")
+    p = add("reference", "select the reference of the next START (no NAME: show it)")
+    p.add_argument("name", nargs="?", metavar="NAME",
+                   help="HOLD, STEP, RAMP, SINE, CASE1, CASE3 or STREAM")
+    p = add("setpoint", "send a set-point to a node RUNNING the STREAM reference")
+    p.add_argument("x_cm", type=_finite, metavar="X_CM", help="target position in cm")
+    p.add_argument("--no-check", action="store_true",
+                   help="send even when the node would drop it (not RUNNING STREAM, outside the band)")
+
+    p = add("record", "record telemetry (TELEM_A..E) to CSV, every frame to a .blf/.asc log")
+    p.add_argument("csv", metavar="CSV", help="output file (one row per telemetry tick, units in the header)")
+    p.add_argument("--seconds", type=_positive, default=10.0, help="how long to record (default 10 s)")
+    p.add_argument("--samples", type=_count, help="stop after this many rows")
+    p.add_argument("--log", metavar="FILE", help="python-can log of every frame: .blf, .asc or .log "
+                                                 "(default: the CSV's name with .blf)")
+    p.add_argument("--no-log", action="store_true", help="no frame log")
+    p.add_argument("--start", action="store_true",
+                   help="send START when the recording begins (node ARMED) and STOP at its end")
+    p.add_argument("--no-host-heartbeat", action="store_true",
+                   help="do not send HOST_HEARTBEAT (another program keeps the node alive)")
+    p.add_argument("--all-frames", action="store_true",
+                   help="receive and log every frame on the bus (default: the node's replies, "
+                        "heartbeats and telemetry; a busy bus can then overrun pmactl)")
+    p.add_argument("--quiet", "-q", action="store_true", help="no progress display")
+
+    p = add("plot", "PNG figures of a recording, in the style of the paper's, and its numbers "
+                    "(entry into the w1 band, max |e| and RMSTE after t_u, peak velocity and input)")
+    p.add_argument("csv", metavar="CSV")
+    p.add_argument("--out", metavar="PREFIX",
+                   help="writes PREFIX.png and PREFIX_<panel>.png (default: the CSV without .csv)")
+    p.add_argument("--w1", type=_positive, metavar="CM", help="draw the accuracy band +-w1 on the error")
+    p.add_argument("--band", type=_finite, nargs=2, metavar=("LOW_CM", "HIGH_CM"),
+                   help="draw the constraints on the position")
+    p.add_argument("--t-u", type=_positive, metavar="S", help="mark the tuning time t_u")
+    p.add_argument("--title")
+    p.add_argument("--no-meta", action="store_true",
+                   help="ignore the recording's .meta.json (by default w1, t_u and the band come from it)")
+    p.add_argument("--dpi", type=_count, default=150, help="resolution (default 150)")
+    p.add_argument("--no-panels", action="store_true",
+                   help="only PREFIX.png (all panels), not one PNG per panel")
+
+    p = add("monitor", "heartbeats and faults of every node, live, until Ctrl-C")
+    p.add_argument("--seconds", type=_positive, help="stop after this long")
+    p.add_argument("--every", action="store_true", help="print every heartbeat, not only changes")
+    p.add_argument("--silent-after", type=_positive, default=1.0, metavar="S",
+                   help="report a node silent after this long without a heartbeat (default 1.0 s)")
+    p.add_argument("--host-heartbeat", action="store_true",
+                   help="send HOST_HEARTBEAT to --node while monitoring (keeps it RUNNING)")
+    return parser
+
+
+# ----------------------------------------------------------------- helpers --
+class Session:
+    """The parsed arguments, the protocol, and the bus (opened on first use)."""
+
+    def __init__(self, args: argparse.Namespace, out: Callable[[str], None]) -> None:
+        self.args = args
+        self.out = out
+        self.proto: Protocol = load_protocol()
+        self._bus: can.BusABC | None = None
+        self._node: PmaNode | None = None
+        self.cfg: dict[str, Any] | None = None
+
+    @property
+    def node(self) -> PmaNode:
+        if self._node is None:
+            self.cfg = bus_config(self.args.interface, self.args.channel, self.args.bitrate)
+            self._bus = open_bus(self.cfg)
+            self._node = PmaNode(self._bus, self.args.node, self.proto, timeout_s=self.args.timeout)
+            # Only the frames the command needs: on a bus with a 1 kHz plant bridge a
+            # client that takes every frame falls behind (record sets its own).
+            cmd = self.args.command
+            if cmd == "scan" or (cmd == "estop" and self.args.all):
+                self._node.listen_to(["HEARTBEAT"], node=None)
+            elif cmd == "monitor":
+                self._node.listen_to(["HEARTBEAT", "ESTOP", "ESTOP_ALL", "COMMAND", "COMMAND_ACK",
+                                      "PARAM_RESP"], node=None)
+            elif cmd != "record":
+                self._node.listen_to(NODE_REPLIES)
+        return self._node
+
+    @property
+    def bus_text(self) -> str:
+        return describe_bus(self.cfg) if self.cfg else "?"
+
+    def close(self) -> None:
+        if self._bus is not None:
+            try:
+                self._bus.shutdown()
+            except Exception:       # noqa: BLE001 - closing must not hide the command's result
+                pass
+
+    def param(self, name: str) -> Param:
+        try:
+            return self.proto.param(name)
+        except KeyError:
+            close = difflib.get_close_matches(name, list(self.proto.by_name), n=3)
+            hint = f" (did you mean {', '.join(close)}?)" if close else \
+                " (pmactl params list shows them all)"
+            raise UsageError(f"unknown parameter {name!r}{hint}") from None
+
+
+def _value_unit(p: Param | None, text: str) -> str:
+    unit = p.unit if p else ""
+    if p and p.values:
+        return text
+    return f"{text} {unit}" if unit else text
+
+
+def _enum_text(p: Param, value: float | int) -> str:
+    return f"{p.text(value)} ({int(value)})" if p.values else _value_unit(p, p.text(value))
+
+
+def _table(rows: list[list[str]], right: set[int]) -> list[str]:
+    widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
+    lines = []
+    for r in rows:
+        cells = [c.rjust(w) if i in right else c.ljust(w) for i, (c, w) in enumerate(zip(r, widths))]
+        lines.append("  ".join(cells).rstrip())
+    return lines
+
+
+def _status_lines(st: Status, bus_text: str) -> list[str]:
+    flags = " ".join(st.flag_names) or "-"
+    return [f"node {st.node} on {bus_text}",
+            f"  state        {st.state_name}",
+            f"  fault        {st.fault_name} ({st.fault})",
+            f"  flags        0x{st.flags:04X} {flags}",
+            f"  controller   {st.controller_name} ({st.controller})",
+            f"  reference    {st.reference_name} ({st.reference})",
+            f"  reset cause  {st.reset_cause_name} ({st.reset_cause})"]
+
+
+# ---------------------------------------------------------------- commands --
+def cmd_scan(s: Session) -> int:
+    node = s.node
+    found = scan(node, s.args.seconds)
+    if not found:
+        raise NoReply(f"no node heartbeat on {s.bus_text} within {s.args.seconds:g} s")
+    rows = [["node", "state", "fault", "controller", "reference", "flags"]]
+    for nid, st in found.items():
+        rows.append([str(nid), st.state_name, st.fault_name, st.controller_name, st.reference_name,
+                     " ".join(st.flag_names) or "-"])
+    for line in _table(rows, {0}):
+        s.out(line)
+    s.out(f"{len(found)} node(s) on {s.bus_text}")
+    return EXIT_OK
+
+
+def cmd_status(s: Session) -> int:
+    st = s.node.status()
+    for line in _status_lines(st, s.bus_text):
+        s.out(line)
+    return EXIT_OK
+
+
+def _matches(name: str, patterns: list[str]) -> bool:
+    if not patterns:
+        return True
+    return any(name == p or name.startswith(p + ".") or fnmatch.fnmatchcase(name, p) for p in patterns)
+
+
+def cmd_params_list(s: Session) -> int:
+    for pat in s.args.patterns:
+        if not any(_matches(n, [pat]) for n in s.proto.by_name):
+            raise UsageError(f"no parameter matches {pat!r} (groups: "
+                             f"{', '.join(sorted({n.split('.')[0] for n in s.proto.by_name}))})")
+    node = s.node
+    ids = node.ids()
+    if not ids:
+        raise NoReply(f"node {node.node} lists no parameters")
+    rows = [["id", "name", "value", "unit", "min", "max", "default", "access"]]
+    unknown = 0
+    for pid in ids:
+        p = s.proto.by_id.get(pid)
+        if p is not None and not _matches(p.name, s.args.patterns):
+            continue
+        if p is None and s.args.patterns:
+            continue
+        info: ParamInfo = node.param_info(pid)
+        changed = " " if (p.same(info.value, info.default) if p else info.value == info.default) else "*"
+        unknown += p is None
+        rows.append([str(pid), info.name, info.text(info.value) + changed,
+                     (info.unit or "-") if p else "?", info.text(info.min), info.text(info.max),
+                     info.text(info.default), p.access if p else "?"])
+    for line in _table(rows, {0}):
+        s.out(line)
+    if unknown:
+        s.out(f"({unknown} id(s) unknown to this pmactl: a newer firmware? names and units come "
+              f"from the package's params.toml)")
+    return EXIT_OK
+
+
+def cmd_params_get(s: Session) -> int:
+    params = [s.param(n) for n in s.args.names]
+    node = s.node
+    for p in params:
+        s.out(f"{p.name} = {_enum_text(p, node.get(p.id))}")
+    return EXIT_OK
+
+
+def cmd_params_set(s: Session) -> int:
+    p = s.param(s.args.name)
+    try:
+        value = p.parse(s.args.value) if s.args.no_check else p.check(s.args.value)
+    except ValueError as e:
+        raise UsageError(str(e)) from None
+    node = s.node
+    old = node.get(p.id)
+    try:
+        new = node.set(p.id, value)
+    except (cantools.database.EncodeError, OverflowError, struct.error) as e:
+        raise UsageError(f"{p.name}: {s.args.value!r} cannot be sent as {p.type}: {e}") from None
+    s.out(f"{p.name} = {_value_unit(p, p.text(new))} (was {p.text(old)})")
+    return EXIT_OK
+
+
+def cmd_params_simple(s: Session) -> int:
+    node = s.node
+    action = s.args.params_command
+    if action == "save":
+        node.save()
+        s.out(f"node {node.node}: parameters saved to storage")
+    elif action == "restore-defaults":
+        node.restore_defaults()
+        s.out(f"node {node.node}: every parameter at its default in RAM (params save to keep them)")
+    elif action == "revert":
+        node.load()
+        s.out(f"node {node.node}: parameters loaded from storage")
+    return EXIT_OK
+
+
+def cmd_params_dump(s: Session) -> int:
+    path = s.args.file
+    paramfile._kind(path)            # a bad file name fails before the bus is touched
+    node = s.node
+    values = node.values()
+    paramfile.write(path, s.proto, values, node.node)
+    known = sum(1 for pid in values if pid in s.proto.by_id)
+    if path != "-":
+        s.out(f"{known} parameters of node {node.node} written to {path}")
+    return EXIT_OK
+
+
+def cmd_params_load(s: Session) -> int:
+    entries = paramfile.load(s.args.file, s.proto)
+    node = s.node
+    if s.args.dry_run:
+        current = node.values([p.id for p, _ in entries])
+        n = 0
+        for p, value in entries:
+            if not p.same(current[p.id], value):
+                n += 1
+                s.out(f"would set {p.name} = {_value_unit(p, p.text(value))} (now {p.text(current[p.id])})")
+        s.out(f"{len(entries)} entries valid, {n} would change (dry run: nothing sent)")
+        return EXIT_OK
+    report = node.load_values(entries, skip_unchanged=not s.args.all)
+    for p, old, new in report.changed:
+        s.out(f"set {p.name} = {_value_unit(p, p.text(new))} (was {p.text(old)})")
+    for e in report.rejected:
+        p = e.param
+        assert p is not None
+        _err(f"node {node.node} rejected set {p.name} = {p.text(e.requested or 0)}: "
+             f"{s.proto.status_text(e.code)}; it stays {p.text(e.current or 0)}")
+    s.out(f"{len(report.changed)} set, {len(report.unchanged)} unchanged, "
+          f"{len(report.rejected)} rejected (from {s.args.file})")
+    return EXIT_REFUSED if report.rejected else EXIT_OK
+
+
+def cmd_command(s: Session) -> int:
+    node = s.node
+    name = s.args.command.upper().replace("-", "_")
+    ack = node.command(name)
+    s.out(f"node {node.node}: {name} OK, state {node.state_name(ack.state)}")
+    if name == "START":
+        try:
+            timeout_ms = int(node.get("safety.host_timeout_ms"))
+        except (PmaError, NoReply):
+            timeout_ms = -1
+        if timeout_ms != 0:
+            when = f"{timeout_ms} ms" if timeout_ms > 0 else "safety.host_timeout_ms"
+            s.out(f"note: a RUNNING node faults (HOST_HEARTBEAT_LOST) without HOST_HEARTBEAT for "
+                  f"{when}: keep `pmactl monitor --host-heartbeat` or `pmactl record` running, "
+                  f"or start with `pmactl record --start`")
+    return EXIT_OK
+
+
+def cmd_estop(s: Session) -> int:
+    node = s.node
+    if not s.args.all:
+        node.estop()
+        st = node.wait_state("FAULT")
+        s.out(f"node {node.node}: ESTOP sent, state {st.state_name} ({st.fault_name})")
+        return EXIT_OK
+    node.estop(all_nodes=True)
+    seen = scan(node, s.args.timeout)
+    if not seen:
+        raise NoReply(f"ESTOP_ALL sent; no node heartbeat on {s.bus_text} within {s.args.timeout:g} s")
+    not_stopped = []
+    for nid, st in seen.items():
+        s.out(f"node {nid}: {st.state_name} ({st.fault_name})")
+        if st.state_name != "FAULT":
+            not_stopped.append(nid)
+    if not_stopped:
+        raise NoReply(f"ESTOP_ALL sent; node(s) {', '.join(map(str, not_stopped))} not in FAULT "
+                      f"within {s.args.timeout:g} s")
+    s.out(f"ESTOP_ALL sent: {len(seen)} node(s) in FAULT")
+    return EXIT_OK
+
+
+def cmd_select(s: Session) -> int:
+    which = s.args.command
+    pname = "ctrl.mode" if which == "controller" else "ref.kind"
+    p = s.proto.param(pname)
+    if s.args.name is None:
+        v = s.node.get(pname)
+        s.out(f"{which} {p.text(v)} ({pname}; one of {', '.join(p.values.values())})")
+        return EXIT_OK
+    try:
+        value = p.check(s.args.name)
+    except ValueError:
+        raise UsageError(f"{which} {s.args.name!r}: not one of {', '.join(p.values.values())}") from None
+    node = s.node
+    cmd = "SELECT_CONTROLLER" if which == "controller" else "SELECT_REFERENCE"
+    ack = node.command(cmd, int(value))
+    s.out(f"node {node.node}: {which} {p.text(value)} (at the next START), state {node.state_name(ack.state)}")
+    return EXIT_OK
+
+
+def cmd_setpoint(s: Session) -> int:
+    node = s.node
+    x = float(s.args.x_cm)
+    if not s.args.no_check:
+        st = node.status()
+        if st.state_name != "RUNNING" or st.reference_name != "STREAM":
+            raise NodeStateError(f"node {node.node} is {st.state_name} with reference "
+                                 f"{st.reference_name}: it uses set-points only while RUNNING STREAM "
+                                 f"(nothing sent; --no-check sends anyway)")
+        lo, hi = float(node.get("safety.x_min_cm")), float(node.get("safety.x_max_cm"))
+        if not lo < x < hi:
+            raise UsageError(f"set-point {x:g} cm is outside the constraint band ({lo:g}, {hi:g}) cm: "
+                             f"the node would drop it (nothing sent)")
+    node.setpoint(x)
+    s.out(f"node {node.node}: set-point {x:g} cm sent")
+    return EXIT_OK
+
+
+def _progress_printer(quiet: bool) -> Callable[[RecordProgress], None] | None:
+    if quiet:
+        return None
+    tty = sys.stderr.isatty()
+    state = {"last_line": -1.0}
+
+    def show(p: RecordProgress) -> None:
+        total = f"/{p.seconds:g}" if p.seconds else ""
+        text = f"recording {p.elapsed_s:5.1f}{total} s  {p.rows} rows"
+        if p.last is not None:
+            v = p.last.values
+            text += f"  t {p.last.t_s:8.3f} s"
+            if "x" in v:
+                text += f"  x {float(v['x']):+.3f} cm"
+            if "e" in v:
+                text += f"  e {float(v['e']):+.4f} cm"
+            if "breaches" in v:
+                text += f"  breaches {int(v['breaches'])}"
+        if tty:
+            sys.stderr.write("\r" + text.ljust(90)[:110])
+            sys.stderr.flush()
+        elif p.elapsed_s - state["last_line"] >= 1.0:
+            state["last_line"] = p.elapsed_s
+            sys.stderr.write(text + "\n")
+    return show
+
+
+def cmd_record(s: Session) -> int:
+    csv_path = Path(s.args.csv)
+    log = None
+    if not s.args.no_log:
+        log = Path(s.args.log) if s.args.log else csv_path.with_suffix(".blf")
+        if log.suffix.lower() not in (".blf", ".asc", ".log"):
+            raise UsageError(f"--log {log}: use a .blf, .asc or .log file")
+    meta = csv_path.with_name(csv_path.stem + ".meta.json")
+    for path in (csv_path, log):
+        if path is not None and not path.parent.exists():
+            raise UsageError(f"{path}: directory {path.parent} does not exist")
+    node = s.node
+    rec = TelemetryRecorder(node, csv_path, log, meta, host_heartbeat=not s.args.no_host_heartbeat,
+                            all_frames=s.args.all_frames)
+    show = _progress_printer(s.args.quiet)
+    try:
+        summary = rec.run(seconds=s.args.seconds, samples=s.args.samples, start=s.args.start,
+                          progress=show)
+    finally:
+        if show is not None and sys.stderr.isatty():
+            sys.stderr.write("\n")
+    span = (f" (t {summary.t_first_s:.3f}..{summary.t_last_s:.3f} s)"
+            if summary.t_first_s is not None and summary.t_last_s is not None else "")
+    s.out(f"recorded {summary.rows} rows{span} from node {node.node} in {summary.elapsed_s:.1f} s: "
+          f"{summary.stop_reason}")
+    s.out(f"  csv   {summary.csv_path}")
+    if summary.log_path:
+        s.out(f"  log   {summary.log_path} ({summary.frames_logged} frames)")
+    s.out(f"  meta  {summary.meta_path}")
+    e = f"{summary.max_abs_e_cm:.4f} cm" if summary.max_abs_e_cm is not None else "-"
+    b = str(summary.breaches) if summary.breaches is not None else "-"
+    s.out(f"  max |e| {e}, breaches {b}, incomplete rows {summary.incomplete}, "
+          f"lost rows {summary.lost}")
+    if summary.rows == 0:
+        raise NoReply(f"no telemetry from node {node.node}")
+    if summary.stop_reason.startswith(f"node {node.node} left RUNNING"):
+        return EXIT_REFUSED
+    return EXIT_OK
+
+
+def cmd_plot(s: Session) -> int:
+    from pmactl.plot import PlotOptions, plot_recording
+    csv_path = Path(s.args.csv)
+    try:
+        rec = read_recording(csv_path)
+    except RecordingError as e:
+        raise paramfile.ParamFileError(str(csv_path), [str(e).split(": ", 1)[-1]]) from None
+    if len(rec) == 0:
+        raise paramfile.ParamFileError(str(csv_path), ["no rows to plot"])
+    w1, band, t_u, title = s.args.w1, tuple(s.args.band) if s.args.band else None, s.args.t_u, s.args.title
+    meta_path = csv_path.with_name(csv_path.stem + ".meta.json")
+    if not s.args.no_meta and meta_path.exists():
+        try:
+            meta = json.loads(meta_path.read_text())
+            params = meta.get("params", {})
+            if meta.get("controller") == "PPC":
+                w1 = w1 if w1 is not None else params.get("ppc.w1_cm")
+                t_u = t_u if t_u is not None else params.get("ppc.t_u_s")
+            if band is None and "safety.x_min_cm" in params and "safety.x_max_cm" in params:
+                band = (params["safety.x_min_cm"], params["safety.x_max_cm"])
+            if title is None:
+                title = (f"node {meta.get('node')}, {meta.get('controller')}, "
+                         f"reference {params.get('ref.kind', '?')}")
+        except (OSError, ValueError, AttributeError) as e:
+            raise paramfile.ParamFileError(str(meta_path), [f"not a recording's metadata: {e}"]) from None
+    prefix = Path(s.args.out) if s.args.out else csv_path.with_suffix("")
+    written = plot_recording(rec, prefix, PlotOptions(w1_cm=w1, band_cm=band, t_u_s=t_u,  # type: ignore[arg-type]
+                                                      title=title, dpi=s.args.dpi,
+                                                      panels=not s.args.no_panels))
+    for path in written:
+        s.out(str(path))
+    s.out(f"{csv_path}:")
+    for line in metrics(rec, w1, t_u).lines(w1, t_u, rec.units.get("u", "input unit")):
+        s.out(f"  {line}")
+    return EXIT_OK
+
+
+def cmd_monitor(s: Session) -> int:
+    node = s.node
+    if s.args.host_heartbeat:
+        node.host_heartbeat_s = 0.1
+    mon = BusMonitor(node, silent_s=s.args.silent_after, every=s.args.every)
+    until = f" for {s.args.seconds:g} s" if s.args.seconds else " (Ctrl-C to stop)"
+    s.out(f"watching {s.bus_text}{until}")
+    end = time.monotonic() + s.args.seconds if s.args.seconds else math.inf
+    try:
+        while (left := end - time.monotonic()) > 0:
+            for ev in mon.poll(min(left, 0.2)):
+                s.out(_event_line(ev))
+    except KeyboardInterrupt:
+        pass
+    s.out(f"{len(mon.last)} node(s) seen" + (": " if mon.last else "") +
+          ", ".join(f"{n} {st.state_name}" + (f" ({st.fault_name})" if st.fault else "")
+                    for n, st in sorted(mon.last.items())))
+    return EXIT_OK
+
+
+def _event_line(ev: MonitorEvent) -> str:
+    who = "bus    " if ev.node < 0 else f"node {ev.node:<2d}"
+    return f"{ev.time:8.3f}  {who}  {ev.text}"
+
+
+PARAMS_COMMANDS: dict[str, Callable[[Session], int]] = {
+    "list": cmd_params_list, "get": cmd_params_get, "set": cmd_params_set,
+    "save": cmd_params_simple, "restore-defaults": cmd_params_simple, "revert": cmd_params_simple,
+    "dump": cmd_params_dump, "load": cmd_params_load,
+}
+COMMANDS: dict[str, Callable[[Session], int]] = {
+    "scan": cmd_scan, "status": cmd_status,
+    "params": lambda s: PARAMS_COMMANDS[s.args.params_command](s),
+    "arm": cmd_command, "disarm": cmd_command, "start": cmd_command, "stop": cmd_command,
+    "clear-faults": cmd_command, "estop": cmd_estop, "controller": cmd_select,
+    "reference": cmd_select, "setpoint": cmd_setpoint, "record": cmd_record, "plot": cmd_plot,
+    "monitor": cmd_monitor,
+}
+
+
+def _err(text: str) -> None:
+    sys.stderr.write(f"pmactl: {text}\n")
+    sys.stderr.flush()
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Runs pmactl with argv (default: sys.argv[1:]); returns the exit status."""
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as e:          # argparse: --help (0) or a usage error (2)
+        return int(e.code) if isinstance(e.code, int) else EXIT_USAGE
+
+    def out(line: str) -> None:
+        print(line, flush=True)
+
+    # python-can logs an interface's errors before it raises them; pmactl reports them itself
+    logging.getLogger("can").setLevel(logging.DEBUG if args.verbose else logging.CRITICAL)
+    if args.verbose:
+        logging.basicConfig(level=logging.WARNING, format="pmactl: %(name)s: %(message)s")
+
+    s = Session(args, out)
+    try:
+        return COMMANDS[args.command](s)
+    except UsageError as e:
+        _err(f"error: {e}")
+        return EXIT_USAGE
+    except paramfile.ParamFileError as e:
+        _err(f"error: {e.path}: bad file (nothing sent):")
+        for problem in e.problems:
+            sys.stderr.write(f"  {problem}\n")
+        return EXIT_FILE
+    except InterfaceError as e:
+        _err(f"error: {e}")
+        return EXIT_INTERFACE
+    except SetRejected as e:
+        p = e.param
+        name = p.name if p else "?"
+        kept = f"; {name} stays {p.text(e.current)}" if p is not None and e.current is not None else ""
+        _err(f"error: node {args.node} rejected set {name} = "
+             f"{p.text(e.requested) if p and e.requested is not None else '?'}: "
+             f"{s.proto.status_text(e.code)}{kept}")
+        return EXIT_REFUSED
+    except CommandError as e:
+        cmd = e.what.replace("command ", "")
+        _err(f"error: node {args.node} refused {cmd}: {s.proto.status_text(e.code)}")
+        return EXIT_REFUSED
+    except PmaError as e:
+        _err(f"error: node {args.node}: {e.what}: {s.proto.status_text(e.code)}")
+        return EXIT_REFUSED
+    except NodeStateError as e:
+        _err(f"error: {e}")
+        return EXIT_REFUSED
+    except NoReply as e:
+        _err(f"error: {e} (is the node on {s.bus_text}? --node, --channel, --timeout)")
+        return EXIT_NO_REPLY
+    except can.CanError as e:
+        _err(f"error: CAN interface {s.bus_text} failed: {e}")
+        return EXIT_INTERFACE
+    except KeyboardInterrupt:
+        _err("interrupted")
+        return EXIT_INTERRUPTED
+    finally:
+        s.close()
+
+
+if __name__ == "__main__":
+    sys.exit(main())
