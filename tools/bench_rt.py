@@ -23,32 +23,17 @@ from __future__ import annotations
 import argparse
 import os
 import random
-import signal
-import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
 import can
 import numpy as np
 
-from pmactl import PmaNode, load_protocol
-
-ROOT = Path(__file__).resolve().parents[1]
-FW = Path(os.environ.get("PMA_FW_HOST", ROOT / "build/host-ubsan/firmware/targets/host/pma-fw-host"))
-
-
-def start_fw(channel: str, lockstep: bool) -> subprocess.Popen[bytes]:
-    args = [str(FW), "--can", channel, "--node", "0"] + (["--lockstep"] if lockstep else [])
-    return subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-
-
-def stop_fw(p: subprocess.Popen[bytes]) -> None:
-    p.send_signal(signal.SIGINT)
-    try:
-        p.wait(5)
-    except subprocess.TimeoutExpired:
-        p.kill()
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the repository's hil package
+from hil.fw_process import FirmwareProcess  # noqa: E402
+from pmactl import PmaNode, load_protocol  # noqa: E402
 
 
 def pct(a: np.ndarray) -> str:
@@ -111,8 +96,10 @@ def main() -> int:
         return 2
     proto = load_protocol()
     print(f"pma-fw-host real-time benchmark on {args.channel} ({os.uname().release})")
+    logs = tempfile.TemporaryDirectory(prefix="bench_rt-")
     for lockstep in (False, True):
-        fw = start_fw(args.channel, lockstep)
+        fw = FirmwareProcess(Path(logs.name), ["--node", "0"] + (["--lockstep"] if lockstep else []),
+                             channel=args.channel).start()
         try:
             with can.Bus(interface="socketcan", channel=args.channel, receive_own_messages=True) as bus:
                 node = PmaNode(bus, 0, proto, timeout_s=5.0)
@@ -125,7 +112,8 @@ def main() -> int:
                 lat = latency(bus, node, args.samples)
                 print(f"  sample-to-command latency [us], {mode}: {pct(lat)}")
         finally:
-            stop_fw(fw)
+            fw.stop()
+    logs.cleanup()
     return 0
 
 
