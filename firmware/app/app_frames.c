@@ -16,14 +16,17 @@
 #include "app_internal.h"
 #include "generated/pma_proto.h"
 
-static void send(pma_app_t *app, uint16_t base_id, uint8_t dlc, const uint8_t *data)
+/* Queues one of this node's frames; a frame the HAL does not take is counted. */
+static int send(pma_app_t *app, uint16_t base_id, uint8_t dlc, const uint8_t *data)
 {
     pma_can_frame_t f;
     memset(&f, 0, sizeof f);
     f.id = (uint16_t)(base_id | app->node_id);
     f.dlc = dlc;
     memcpy(f.data, data, dlc);
-    if (pma_hal_can_send(&f) != PMA_OK) ++app->counters.tx_failed;
+    const int rc = pma_hal_can_send(&f);
+    if (rc != PMA_OK) ++app->counters.tx_failed;
+    return rc;
 }
 
 static int8_t result_code(int rc)
@@ -40,7 +43,7 @@ static void send_ack(pma_app_t *app, uint8_t command, uint8_t arg, int rc)
     };
     uint8_t d[8] = {0};
     (void)pma_proto_command_ack_pack(d, &m, sizeof d);
-    send(app, PMA_PROTO_COMMAND_ACK_FRAME_ID, PMA_PROTO_COMMAND_ACK_LENGTH, d);
+    (void)send(app, PMA_PROTO_COMMAND_ACK_FRAME_ID, PMA_PROTO_COMMAND_ACK_LENGTH, d);
 }
 
 static void send_param_resp(pma_app_t *app, uint8_t op, uint16_t id, int rc, uint8_t type,
@@ -61,7 +64,7 @@ static void send_param_resp(pma_app_t *app, uint8_t op, uint16_t id, int rc, uin
     m.value_i32 = v.i32;
     uint8_t d[8] = {0};
     (void)pma_proto_param_resp_pack(d, &m, sizeof d);
-    send(app, PMA_PROTO_PARAM_RESP_FRAME_ID, PMA_PROTO_PARAM_RESP_LENGTH, d);
+    (void)send(app, PMA_PROTO_PARAM_RESP_FRAME_ID, PMA_PROTO_PARAM_RESP_LENGTH, d);
 }
 
 void pma_app_send_heartbeat(pma_app_t *app)
@@ -90,7 +93,7 @@ void pma_app_send_heartbeat(pma_app_t *app)
     };
     uint8_t d[8] = {0};
     (void)pma_proto_heartbeat_pack(d, &m, sizeof d);
-    send(app, PMA_PROTO_HEARTBEAT_FRAME_ID, PMA_PROTO_HEARTBEAT_LENGTH, d);
+    (void)send(app, PMA_PROTO_HEARTBEAT_FRAME_ID, PMA_PROTO_HEARTBEAT_LENGTH, d);
 }
 
 int pma_app_send_actuator(pma_app_t *app)
@@ -101,14 +104,7 @@ int pma_app_send_actuator(pma_app_t *app)
     };
     uint8_t d[8] = {0};
     (void)pma_proto_plant_actuator_pack(d, &m, sizeof d);
-    pma_can_frame_t f;
-    memset(&f, 0, sizeof f);
-    f.id = (uint16_t)(PMA_PROTO_PLANT_ACTUATOR_FRAME_ID | app->node_id);
-    f.dlc = PMA_PROTO_PLANT_ACTUATOR_LENGTH;
-    memcpy(f.data, d, f.dlc);
-    const int rc = pma_hal_can_send(&f);
-    if (rc != PMA_OK) ++app->counters.tx_failed;
-    return rc;
+    return send(app, PMA_PROTO_PLANT_ACTUATOR_FRAME_ID, PMA_PROTO_PLANT_ACTUATOR_LENGTH, d);
 }
 
 void pma_app_send_telemetry(pma_app_t *app)
@@ -122,22 +118,22 @@ void pma_app_send_telemetry(pma_app_t *app)
         const uint64_t ms = (steps * app->period_us) / 1000u;
         struct pma_proto_telem_a_t m = {.time_ms = (uint32_t)ms, .x_cm = app->x_cm};
         (void)pma_proto_telem_a_pack(d, &m, sizeof d);
-        send(app, PMA_PROTO_TELEM_A_FRAME_ID, PMA_PROTO_TELEM_A_LENGTH, d);
+        (void)send(app, PMA_PROTO_TELEM_A_FRAME_ID, PMA_PROTO_TELEM_A_LENGTH, d);
     }
     if (mask & 0x02u) {
         struct pma_proto_telem_b_t m = {.xr_cm = o->xr_cm, .e_cm = o->e_cm};
         (void)pma_proto_telem_b_pack(d, &m, sizeof d);
-        send(app, PMA_PROTO_TELEM_B_FRAME_ID, PMA_PROTO_TELEM_B_LENGTH, d);
+        (void)send(app, PMA_PROTO_TELEM_B_FRAME_ID, PMA_PROTO_TELEM_B_LENGTH, d);
     }
     if (mask & 0x04u) {
         struct pma_proto_telem_c_t m = {.u = app->u, .v_cm_s = o->v_cm_s};
         (void)pma_proto_telem_c_pack(d, &m, sizeof d);
-        send(app, PMA_PROTO_TELEM_C_FRAME_ID, PMA_PROTO_TELEM_C_LENGTH, d);
+        (void)send(app, PMA_PROTO_TELEM_C_FRAME_ID, PMA_PROTO_TELEM_C_LENGTH, d);
     }
     if (mask & 0x08u) {
         struct pma_proto_telem_d_t m = {.internal1 = o->internal1, .internal2 = o->internal2};
         (void)pma_proto_telem_d_pack(d, &m, sizeof d);
-        send(app, PMA_PROTO_TELEM_D_FRAME_ID, PMA_PROTO_TELEM_D_LENGTH, d);
+        (void)send(app, PMA_PROTO_TELEM_D_FRAME_ID, PMA_PROTO_TELEM_D_LENGTH, d);
     }
     if (mask & 0x10u) {
         struct pma_proto_telem_e_t m = {
@@ -145,7 +141,7 @@ void pma_app_send_telemetry(pma_app_t *app)
             .breaches = (uint16_t)(app->ctrl.breaches > 0xFFFFu ? 0xFFFFu : app->ctrl.breaches),
         };
         (void)pma_proto_telem_e_pack(d, &m, sizeof d);
-        send(app, PMA_PROTO_TELEM_E_FRAME_ID, PMA_PROTO_TELEM_E_LENGTH, d);
+        (void)send(app, PMA_PROTO_TELEM_E_FRAME_ID, PMA_PROTO_TELEM_E_LENGTH, d);
     }
 }
 
