@@ -29,6 +29,25 @@ pma_param_phase_t pma_app_phase(const pma_app_t *app)
     }
 }
 
+int pma_app_bridge_on(const pma_app_t *app)
+{
+    return app->plat.plant_bridge != 0 || app->params.sys_plant_bridge != 0;
+}
+
+/* The bridge was switched (sys.plant_bridge by SET, LOAD or RESTORE_DEFAULTS,
+ * only possible with the output inactive): forget the other source's sample
+ * state, so that a sample from before the switch never counts as fresh. */
+void pma_app_sync_bridge(pma_app_t *app)
+{
+    const uint8_t on = (uint8_t)pma_app_bridge_on(app);
+    if (on == app->bridge_active) return;
+    app->bridge_active = on;
+    app->bridge_have = app->bridge_new = app->bridge_gap = 0;
+    app->ticks_since_sample = 0;
+    app->sample_status = PMA_SAMPLE_NONE;
+    app->sensor_status = PMA_ERR_NOT_READY;
+}
+
 static int output_active(const pma_app_t *app)
 {
     return app->state == PMA_STATE_ARMED || app->state == PMA_STATE_RUNNING;
@@ -169,6 +188,7 @@ int pma_app_init(pma_app_t *app, const pma_app_platform_t *plat)
     if (plat->watchdog_ms != 0) (void)pma_hal_watchdog_start(plat->watchdog_ms);
 
     load_params(app);
+    app->bridge_active = (uint8_t)pma_app_bridge_on(app);
     app->node_id = (uint8_t)(plat->node_id >= 0 && plat->node_id <= 15 ? plat->node_id
                                                                         : (int)app->params.sys_node_id);
     pma_actuator_config_t ac;
@@ -205,7 +225,7 @@ static int cmd_arm(pma_app_t *app)
     }
     int rc = check_cross_params(&app->params);
     if (rc != PMA_OK) return rc;
-    if (app->plat.plant_bridge &&
+    if (pma_app_bridge_on(app) &&
         app->ticks_since_sample >= app->params.safety_sensor_timeout_ticks) {
         return PMA_ERR_NOT_READY; /* the last sample is too old: the rig is not sending */
     }
@@ -295,7 +315,7 @@ int pma_app_command(pma_app_t *app, uint8_t command, uint8_t arg)
 static void acquire(pma_app_t *app)
 {
     int rc;
-    if (app->plat.plant_bridge) {
+    if (pma_app_bridge_on(app)) {
         if (!app->bridge_have) {
             app->sample_status = PMA_SAMPLE_NONE;
             if (app->ticks_since_sample != UINT32_MAX) ++app->ticks_since_sample;
@@ -348,12 +368,12 @@ static void write_output(pma_app_t *app)
         app->dac_counts = 0;
     }
     int rc;
-    if (app->plat.plant_bridge) {
+    if (pma_app_bridge_on(app)) {
         rc = pma_app_send_actuator(app);
     } else {
         rc = pma_hal_dac_write(app->dac_counts);
     }
-    if (rc != PMA_OK && !app->plat.plant_bridge) {
+    if (rc != PMA_OK && !pma_app_bridge_on(app)) {
         /* the DAC refused the value (or failed): never leave an earlier,
          * perhaps active, command on the output. Try the safe value, and if
          * the DAC refuses that too, 0 counts (0 V / 0 mA: a regulator's
@@ -379,6 +399,7 @@ static uint32_t ms_to_ticks(uint32_t ms, uint32_t tick_hz)
 void pma_app_tick(pma_app_t *app, uint32_t late_ticks)
 {
     if (app == NULL || app->state == PMA_STATE_BOOT) return;
+    pma_app_sync_bridge(app);
     ++app->ticks;
     app->late_ticks = late_ticks;
     acquire(app);
@@ -416,7 +437,7 @@ void pma_app_tick(pma_app_t *app, uint32_t late_ticks)
         .bus_off = bus_off,
         .sensor_status = app->sensor_status,
         .x_cm = app->x_cm,
-        .ticks_since_sample = app->plat.plant_bridge ? app->ticks_since_sample : 0u,
+        .ticks_since_sample = pma_app_bridge_on(app) ? app->ticks_since_sample : 0u,
         .late_ticks = late_ticks,
         .ticks_since_host_heartbeat = app->ticks_since_host_heartbeat,
         .controller_error = ctrl_error,

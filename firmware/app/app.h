@@ -98,7 +98,8 @@ typedef enum pma_param_op {
 #define PMA_APP_RECOVER_INTERVAL_US 100000u
 
 typedef struct pma_app_platform {
-    uint8_t plant_bridge;          /* 1: sensor and actuator over CAN frames (host build) */
+    uint8_t plant_bridge;          /* 1: the bridge is forced on (host build: no ADC or DAC);
+                                      0: the parameter sys.plant_bridge decides (board) */
     uint8_t lockstep;              /* the port ticks on sensor frames (reported in the heartbeat) */
     int16_t node_id;               /* 0..15: overrides sys.node_id; -1: use the parameter */
     uint32_t store_first_block;    /* parameter storage: two slots of */
@@ -140,7 +141,8 @@ typedef struct pma_app {
     uint16_t raw_counts;
     int sensor_status;             /* PMA_OK or the conversion's error */
     float x_cm;
-    /* plant bridge */
+    /* plant bridge (on: pma_app_bridge_on()) */
+    uint8_t bridge_active;         /* the bridge setting the state below belongs to */
     uint8_t bridge_have, bridge_new, bridge_gap, bridge_seq, sample_status;
     uint16_t bridge_raw;
     uint32_t ticks_since_sample;
@@ -187,5 +189,11 @@ int pma_app_command(pma_app_t *app, uint8_t command, uint8_t arg);
 void pma_app_raise_fault(pma_app_t *app, pma_fault_t fault);
 
 const char *pma_app_state_name(int state);
+
+/* 1 when the position comes from PLANT_SENSOR frames and the pressure command
+ * leaves in PLANT_ACTUATOR frames instead of the ADC and DAC: forced on by
+ * the platform (plat.plant_bridge, host build) or enabled by the parameter
+ * sys.plant_bridge (board; settable only while the output is inactive). */
+int pma_app_bridge_on(const pma_app_t *app);
 
 #endif /* PMA_APP_H */

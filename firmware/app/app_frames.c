@@ -71,13 +71,13 @@ void pma_app_send_heartbeat(pma_app_t *app)
 {
     uint16_t flags = 0;
     if (app->state == PMA_STATE_ARMED || app->state == PMA_STATE_RUNNING) flags |= PMA_HB_OUTPUT_ACTIVE;
-    if (app->plat.plant_bridge) flags |= PMA_HB_PLANT_BRIDGE;
+    if (pma_app_bridge_on(app)) flags |= PMA_HB_PLANT_BRIDGE;
     if (app->plat.lockstep) flags |= PMA_HB_LOCKSTEP;
     if (app->params_changed) flags |= PMA_HB_PARAMS_CHANGED;
     if (app->params_default) flags |= PMA_HB_PARAMS_DEFAULT;
     if (app->save_failed) flags |= PMA_HB_SAVE_FAILED;
     if (app->sensor_status == PMA_OK &&
-        !(app->plat.plant_bridge &&
+        !(pma_app_bridge_on(app) &&
           app->ticks_since_sample >= app->params.safety_sensor_timeout_ticks)) {
         flags |= PMA_HB_SENSOR_VALID;
     }
@@ -150,7 +150,7 @@ void pma_app_send_telemetry(pma_app_t *app)
 static void on_plant_sensor(pma_app_t *app, const pma_can_frame_t *f)
 {
     struct pma_proto_plant_sensor_t m;
-    if (!app->plat.plant_bridge || f->dlc != PMA_PROTO_PLANT_SENSOR_LENGTH ||
+    if (!pma_app_bridge_on(app) || f->dlc != PMA_PROTO_PLANT_SENSOR_LENGTH ||
         pma_proto_plant_sensor_unpack(&m, f->data, f->dlc) != 0) {
         ++app->counters.frames_bad;
         return;
@@ -302,6 +302,7 @@ static void on_param_req(pma_app_t *app, const pma_can_frame_t *f)
 void pma_app_handle_frame(pma_app_t *app, const pma_can_frame_t *f)
 {
     if (app == NULL || f == NULL) return;
+    pma_app_sync_bridge(app); /* a SET in an earlier frame may have switched the bridge */
     ++app->counters.frames_rx;
     /* emergency stops first: obeyed whatever the length, even an invalid one */
     if (f->id == PMA_PROTO_ESTOP_ALL_FRAME_ID ||

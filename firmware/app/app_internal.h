@@ -9,6 +9,7 @@ void pma_app_adc_scaling(const pma_params_t *p, pma_adc_scaling_t *s);
 int pma_app_apply_timing(pma_app_t *app);
 int pma_app_load_params(pma_app_t *app);
 int pma_app_check_param_groups(const pma_params_t *p);
+void pma_app_sync_bridge(pma_app_t *app);
 
 void pma_app_send_heartbeat(pma_app_t *app);
 void pma_app_send_telemetry(pma_app_t *app);

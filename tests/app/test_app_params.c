@@ -262,7 +262,7 @@ static void test_next_id_enumerates_in_order(void **state)
     assert_status(pma_param_next_id(id, &next), PMA_ERR_EMPTY);
     assert_status(pma_param_next_id(0xFFFF, &next), PMA_ERR_EMPTY);
     /* from inside a gap and from an existing id */
-    assert_status(pma_param_next_id(6, &next), PMA_OK);
+    assert_status(pma_param_next_id(9, &next), PMA_OK); /* the gap after sys.plant_bridge (8) */
     assert_int_equal(next, PMA_PARAM_CTRL_MODE);
     assert_status(pma_param_next_id(PMA_PARAM_CTRL_MODE, &next), PMA_OK);
     assert_int_equal(next, PMA_PARAM_CTRL_U_MIN);

@@ -572,6 +572,104 @@ static void test_bridge_sample_status_and_seq(void **state)
     assert_int_equal(cap.foreign, 0);
 }
 
+/* sys.plant_bridge (the board's switch between ADC/DAC and the bridge):
+ * settable only with the output inactive; off, PLANT_SENSOR frames are
+ * ignored (counted as bad, nothing used, no PLANT_ACTUATOR) and the ADC and
+ * DAC work; on, the bridge replaces them; a platform that forces the bridge
+ * (the host build) keeps it whatever the parameter says. */
+static void test_bridge_parameter(void **state)
+{
+    (void)state;
+    const pma_param_desc_t *d = pma_param_find(PMA_PARAM_SYS_PLANT_BRIDGE);
+    assert_non_null(d);
+    assert_int_equal(d->type, PMA_PARAM_U32);
+    assert_int_equal(d->def.u32, 0u); /* off by default */
+
+    /* off (default, board platform): the ADC is read, bridge frames ignored */
+    start_with(0, -1.5f);
+    assert_int_equal(app.params.sys_plant_bridge, 0u);
+    assert_int_equal(pma_app_bridge_on(&app), 0);
+    const uint32_t bad_before = app.counters.frames_bad;
+    send_sample(7, counts_at(-2.5f));
+    cap_clear();
+    step();
+    assert_int_equal(app.counters.frames_bad, bad_before + 1u);
+    assert_int_equal(app.bridge_have, 0);
+    assert_near(app.x_cm, -1.5f, 0.002); /* the ADC's position, not the frame's */
+    assert_int_equal(sent(PMA_PROTO_PLANT_ACTUATOR_FRAME_ID), 0);
+    assert_int_equal(dac_now(), 0u); /* the DAC is written every tick (safe: 0 kPa) */
+    struct pma_proto_heartbeat_t h = next_heartbeat();
+    assert_int_equal(h.flags & PMA_HB_PLANT_BRIDGE, 0);
+
+    /* refused while ARMED and RUNNING, with the state error; nothing changes */
+    command_ok(PMA_CMD_ARM, 0, PMA_OK);
+    assert_status(set_param(PMA_PARAM_SYS_PLANT_BRIDGE, vu(1)), PMA_ERR_STATE);
+    command_ok(PMA_CMD_START, 0, PMA_OK);
+    assert_state(app.state, PMA_STATE_RUNNING);
+    assert_status(set_param(PMA_PARAM_SYS_PLANT_BRIDGE, vu(1)), PMA_ERR_STATE);
+    assert_int_equal(app.params.sys_plant_bridge, 0u);
+    assert_int_equal(pma_app_bridge_on(&app), 0);
+    /* out of range: refused in IDLE too */
+    command_ok(PMA_CMD_DISARM, 0, PMA_OK);
+    assert_status(set_param(PMA_PARAM_SYS_PLANT_BRIDGE, vu(2)), PMA_ERR_RANGE);
+
+    /* accepted while disarmed: the bridge takes over at once */
+    const uint32_t dac_writes = pma_fake_dac_write_count();
+    set_u32(PMA_PARAM_SYS_PLANT_BRIDGE, 1u);
+    assert_int_equal(pma_app_bridge_on(&app), 1);
+    cap_clear();
+    step();
+    struct pma_proto_plant_actuator_t m = last_actuator();
+    assert_int_equal(m.sample, PMA_SAMPLE_NONE); /* the ADC's sample does not count as one */
+    assert_status(app.sensor_status, PMA_ERR_NOT_READY);
+    command_ok(PMA_CMD_ARM, 0, PMA_ERR_NOT_READY); /* no bridge sample yet */
+    send_sample(40, counts_at(-2.0f));
+    cap_clear();
+    step();
+    m = last_actuator();
+    assert_int_equal(m.seq, 40);
+    assert_int_equal(m.sample, PMA_SAMPLE_NEW);
+    assert_near(app.x_cm, -2.0f, 0.002);
+    h = next_heartbeat();
+    assert_true(h.flags & PMA_HB_PLANT_BRIDGE);
+    /* ARMED over the bridge: the pressure leaves in frames, the DAC is left alone */
+    send_sample(41, counts_at(-2.0f));
+    step(); /* ARM wants the sample of the tick before */
+    command_ok(PMA_CMD_ARM, 0, PMA_OK);
+    for (uint8_t s = 42; s < 62; ++s) {
+        send_sample(s, counts_at(-2.0f));
+        cap_clear();
+        step();
+    }
+    m = last_actuator();
+    assert_int_equal(m.output_active, 1);
+    assert_int_equal(m.dac_counts, T_P0_COUNTS);
+    assert_int_equal(pma_fake_dac_write_count(), dac_writes);
+    assert_status(set_param(PMA_PARAM_SYS_PLANT_BRIDGE, vu(0)), PMA_ERR_STATE);
+    assert_int_equal(pma_app_bridge_on(&app), 1);
+
+    /* back off while disarmed: the ADC and DAC again, bridge frames ignored */
+    command_ok(PMA_CMD_DISARM, 0, PMA_OK);
+    set_u32(PMA_PARAM_SYS_PLANT_BRIDGE, 0u);
+    pma_fake_adc_set(counts_at(-1.0f));
+    send_sample(62, counts_at(-2.5f));
+    cap_clear();
+    step();
+    assert_near(app.x_cm, -1.0f, 0.002);
+    assert_int_equal(sent(PMA_PROTO_PLANT_ACTUATOR_FRAME_ID), 0);
+    assert_true(pma_fake_dac_write_count() > dac_writes);
+
+    /* the host build forces the bridge: the parameter at 0 does not turn it off */
+    start_with(1, -1.5f);
+    assert_int_equal(app.params.sys_plant_bridge, 0u);
+    assert_int_equal(pma_app_bridge_on(&app), 1);
+    send_sample(1, counts_at(-2.0f));
+    cap_clear();
+    step();
+    assert_int_equal(last_actuator().sample, PMA_SAMPLE_NEW);
+    assert_int_equal(pma_fake_dac_write_count(), 0);
+}
+
 /* PLANT_SENSOR (also in ADC mode), SETPOINT and HOST_HEARTBEAT of the wrong
  * length: dropped, counted, no reply, as if never received. */
 static void test_wrong_length_frames_dropped(void **state)
@@ -695,6 +793,7 @@ int main(void)
         cmocka_unit_test(test_heartbeat_flags_by_state),
         cmocka_unit_test(test_telemetry_running_only_decimation_and_mask),
         cmocka_unit_test(test_bridge_sample_status_and_seq),
+        cmocka_unit_test(test_bridge_parameter),
         cmocka_unit_test(test_wrong_length_frames_dropped),
         cmocka_unit_test(test_setpoint_stream),
     };

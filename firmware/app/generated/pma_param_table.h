@@ -11,6 +11,7 @@ enum pma_param_id {
     PMA_PARAM_SYS_HEARTBEAT_MS = 3,
     PMA_PARAM_TELEM_DECIMATION = 4,
     PMA_PARAM_TELEM_MASK = 5,
+    PMA_PARAM_SYS_PLANT_BRIDGE = 8,
     PMA_PARAM_CTRL_MODE = 16,
     PMA_PARAM_CTRL_U_MIN = 17,
     PMA_PARAM_CTRL_U_MAX = 18,
@@ -73,8 +74,10 @@ enum pma_param_id {
     PMA_PARAM_SAFETY_SAFE_KPA = 168,
 };
 
-#define PMA_PARAM_COUNT 65u
+#define PMA_PARAM_COUNT 66u
 
+#define PMA_SYS_PLANT_BRIDGE_OFF 0u
+#define PMA_SYS_PLANT_BRIDGE_ON 1u
 #define PMA_CTRL_MODE_OFF 0u
 #define PMA_CTRL_MODE_PPC 1u
 #define PMA_CTRL_MODE_MFAC 2u
@@ -100,6 +103,7 @@ typedef struct pma_params {
     uint32_t sys_heartbeat_ms;            /* id 3 [ms] */
     uint32_t telem_decimation;            /* id 4 [ticks] */
     uint32_t telem_mask;                  /* id 5 */
+    uint32_t sys_plant_bridge;            /* id 8 */
     uint32_t ctrl_mode;                   /* id 16 */
     float ctrl_u_min;                  /* id 17 [input unit] */
     float ctrl_u_max;                  /* id 18 [input unit] */
