@@ -4,6 +4,9 @@
 #   cortex-m4f  -mcpu=cortex-m4 -mthumb -mfloat-abi=hard -mfpu=fpv4-sp-d16   QEMU -M mps2-an386
 #   cortex-m3   -mcpu=cortex-m3 -mthumb (soft float)                          QEMU -M mps2-an385
 #   cortex-m0   -mcpu=cortex-m0 -mthumb (soft float)                          QEMU -M microbit
+#   stm32g474   -mcpu=cortex-m4 -mthumb -mfloat-abi=hard -mfpu=fpv4-sp-d16   none: the board image
+#               (firmware/targets/stm32g474; no QEMU machine emulates a G474, no tests; its
+#               startup code and linker script come from hal/portable/st/stm32g474)
 #
 # What this file sets for every target of the build:
 #   - the core/ABI flags above, -ffunction-sections -fdata-sections, -Wl,--gc-sections;
@@ -46,7 +49,7 @@ set(CMAKE_FIND_ROOT_PATH_MODE_INCLUDE ONLY)
 set(CMAKE_FIND_ROOT_PATH_MODE_PACKAGE ONLY)
 
 if(NOT DEFINED PMA_TARGET OR PMA_TARGET STREQUAL "")
-  message(FATAL_ERROR "arm-none-eabi.cmake: set PMA_TARGET to cortex-m4f, cortex-m3 or cortex-m0 "
+  message(FATAL_ERROR "arm-none-eabi.cmake: set PMA_TARGET to cortex-m4f, cortex-m3, cortex-m0 or stm32g474 "
                       "(e.g. cmake --preset cortex-m4f)")
 endif()
 
@@ -62,14 +65,25 @@ elseif(PMA_TARGET STREQUAL "cortex-m0")
   set(_pma_cpu_flags "-mcpu=cortex-m0 -mthumb -mfloat-abi=soft")
   set(PMA_QEMU_MACHINE microbit)
   set(PMA_QEMU_BOARD microbit)
+elseif(PMA_TARGET STREQUAL "stm32g474")
+  set(_pma_cpu_flags "-mcpu=cortex-m4 -mthumb -mfloat-abi=hard -mfpu=fpv4-sp-d16")
 else()
   message(FATAL_ERROR "arm-none-eabi.cmake: PMA_TARGET='${PMA_TARGET}' is not an ARM target "
-                      "(cortex-m4f, cortex-m3 or cortex-m0)")
+                      "(cortex-m4f, cortex-m3, cortex-m0 or stm32g474)")
 endif()
 
+if(PMA_TARGET STREQUAL "stm32g474")
+  # The board image prints nothing: newlib-nano (smaller memcpy, math errno
+  # state) for compiling and linking alike, so that the two never disagree.
+  string(APPEND _pma_cpu_flags " --specs=nano.specs")
+endif()
 set(CMAKE_C_FLAGS_INIT "${_pma_cpu_flags} -ffunction-sections -fdata-sections")
 set(CMAKE_ASM_FLAGS_INIT "${_pma_cpu_flags}")
 set(CMAKE_EXE_LINKER_FLAGS_INIT "-Wl,--gc-sections")
+
+if(NOT DEFINED PMA_QEMU_MACHINE)
+  return() # a board image: nothing to emulate
+endif()
 
 # QEMU: no display, no monitor, no UART; semihosting console and exit go to the host process, so
 # printf lands on QEMU's stdout and exit(n) / return n from main becomes QEMU's exit status
