@@ -1,0 +1,178 @@
+"""Lockstep throughput of the HIL loop, next to a raw python-can round trip with
+the same firmware node in the same run, and where the time in between goes.
+
+    python -m hil bench [--seconds 5]
+
+Each variant drives one pma-fw-host node in lockstep mode (one PLANT_SENSOR =
+one control tick) for --seconds of wall time and counts completed steps:
+
+  raw        python-can send of a prebuilt frame + recv of the node's PLANT_ACTUATOR:
+             the limit of this loop (the node's tick is in it)
+  +codec     the frames encoded and decoded with cantools from the DBC
+  +log       and every frame written to the python-can BLF log
+  +rig       and the simulated rig stepped by one control period (RK4)
+  runner     the HIL runner's own step (hil/runner.py, one lane: also its
+             bookkeeping and telemetry), from a HOLD scenario
+
+The cost of each addition is the difference of the reciprocal rates (us per step).
+"""
+from __future__ import annotations
+
+import json
+import statistics
+import tempfile
+import time
+from pathlib import Path
+from typing import Any, Callable
+
+import can
+
+from .fw_process import FW_HOST, BUILD_HINT, FirmwareProcess
+from .rig import Rig
+from .rig_params import RigParams
+from .scenario import parse, protocol
+
+NODE = 1
+ROUNDS = 5
+
+
+def _loop(seconds: float, step: Callable[[int], None]) -> float:
+    """Steps per second of `step` over `seconds` of wall time (after 50 warm-up steps)."""
+    for k in range(50):
+        step(k)
+    n = 0
+    t0 = time.perf_counter()
+    end = t0 + seconds
+    while True:
+        step(n)
+        n += 1
+        if n % 100 == 0 and time.perf_counter() >= end:
+            break
+    return n / (time.perf_counter() - t0)
+
+
+def measure(cfg: dict[str, Any], seconds: float, work: Path) -> dict[str, Any]:
+    proto = protocol()
+    sensor_id = proto.frame_id("PLANT_SENSOR", NODE)
+    act_id = proto.frame_id("PLANT_ACTUATOR", NODE)
+    sensor_def, act_def = proto.messages["PLANT_SENSOR"], proto.messages["PLANT_ACTUATOR"]
+    rig = Rig(RigParams.from_dict({"p0_kpa": 300.0, "substep_s": 2.5e-4}), seed=1)
+    fw = FirmwareProcess(work, ["--node", str(NODE), "--storage", str(work / "bench.nvm"), "--lockstep"],
+                         channel=str(cfg.get("channel", "vcan0"))).start()
+    bus = can.Bus(**cfg)
+    bus.set_filters([{"can_id": act_id, "can_mask": 0x7FF, "extended": False}])
+    logger = can.Logger(str(work / "bench.blf"))
+    state = {"seq": 0}
+    try:
+        deadline = time.monotonic() + 10
+        while time.monotonic() < deadline:      # the node is up when it answers a sample
+            bus.send(can.Message(arbitration_id=sensor_id, data=bytes([0, 0x10, 0x08]), is_extended_id=False))
+            if bus.recv(0.2) is not None:
+                break
+        else:
+            raise RuntimeError(f"pma-fw-host did not answer:\n{fw.output()}")
+
+        def exchange(data: bytes, log: bool) -> can.Message:
+            msg = can.Message(arbitration_id=sensor_id, data=data, is_extended_id=False)
+            bus.send(msg)
+            if log:
+                logger.on_message_received(msg)
+            while True:
+                r = bus.recv(2.0)
+                if r is None:
+                    raise RuntimeError(f"no PLANT_ACTUATOR within 2 s:\n{fw.output()[-2000:]}")
+                if log:
+                    logger.on_message_received(r)
+                if r.arbitration_id == act_id and r.data[0] == data[0]:
+                    return r
+
+        def raw(_: int) -> None:
+            state["seq"] = (state["seq"] + 1) & 0xFF
+            exchange(bytes([state["seq"], 0x10, 0x08]), False)
+
+        def variant(use_rig: bool, log: bool) -> Callable[[int], None]:  # noqa: C901
+            def step(_: int) -> None:
+                state["seq"] = (state["seq"] + 1) & 0xFF
+                counts = rig.sensor_counts() if use_rig else 2064
+                data = sensor_def.encode({"Seq": state["seq"], "RawCounts": counts}, scaling=False)
+                r = exchange(bytes(data), log)
+                sig = act_def.decode(bytes(r.data), decode_choices=False, scaling=False)
+                if use_rig:
+                    rig.apply_dac(int(sig["DacCounts"]))
+                    rig.step(1e-3)
+            return step
+
+        variants = {"raw": raw, "+codec": variant(False, False), "+log": variant(False, True),
+                    "+rig": variant(True, True)}
+        # interleaved rounds, median per variant: the guest's single CPU is shared with
+        # whatever else the machine does, so one long block per variant would be skewed
+        samples: dict[str, list[float]] = {k: [] for k in variants}
+        for _ in range(ROUNDS):
+            for name, fn in variants.items():
+                samples[name].append(_loop(seconds / ROUNDS, fn))
+        rates = {k: statistics.median(v) for k, v in samples.items()}
+        # the rig alone, outside the bus loop
+        t0 = time.perf_counter()
+        for _ in range(2000):
+            rig.step(1e-3)
+        rig_us = (time.perf_counter() - t0) / 2000 * 1e6
+    finally:
+        logger.stop()
+        bus.shutdown()
+        fw.stop(expect_status=0)
+    runs = sorted((_runner_rate(cfg, seconds / ROUNDS, work / f"r{i}") for i in range(3)),
+                  key=lambda r: r["ticks_per_s"])
+    rates["runner"] = runs[1]["ticks_per_s"]
+    split = {k: runs[1][k] / runs[1]["run_ticks"] * 1e6 for k in ("recv_wait_s", "rig_s", "other_s")}
+    us = {k: 1e6 / v for k, v in rates.items()}
+    order = list(rates)
+    return {"seconds": seconds, "steps_per_s": rates, "us_per_step": us,
+            "added_us_per_step": {b: us[b] - us[a] for a, b in zip(order, order[1:])},
+            "rig_step_us_alone": rig_us, "runner_us_per_step": split,
+            "runner_vs_raw": rates["runner"] / rates["raw"]}
+
+
+def _runner_rate(cfg: dict[str, Any], seconds: float, work: Path) -> dict[str, float]:
+    from .runner import RunOptions, Runner
+    # a 1-lane HOLD run; its length in control time is set so that it lasts about `seconds`
+    sc = parse({"name": "bench", "duration_s": max(1.0, seconds * 0.6), "rig": {"p0_kpa": 60.0, "substep_s": 2.5e-4},
+                "params": {"act.p0_kpa": 100.0, "act.polarity": -1, "act.p_max_kpa": 900.0, "ctrl.u_min": -800.0,
+                           "ctrl.u_max": 100.0},
+                "reference": {"kind": "HOLD", "offset_cm": -1.0},
+                "controllers": [{"label": "pid", "mode": "PID"}]})
+    summary = Runner(sc, RunOptions(out=work / "runner", bus_config=cfg, progress=False)).run()
+    if summary["errors"]:
+        raise RuntimeError("; ".join(summary["errors"]))
+    return dict(summary["benchmark"])
+
+
+def run_bench(cfg: dict[str, Any], seconds: float, out: Path) -> int:
+    if not FW_HOST.exists():
+        print(f"hil bench: {FW_HOST} not found: {BUILD_HINT}")
+        return 1
+    out.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(dir=out) as tmp:
+        r = measure(cfg, seconds, Path(tmp))
+    print(f"lockstep HIL loop over {cfg.get('interface')} {cfg.get('channel')}, one pma-fw-host node, "
+          f"{seconds:g} s per variant")
+    print(f"{'variant':8s} {'steps/s':>9s} {'us/step':>9s} {'added us':>9s}")
+    prev = None
+    for k, v in r["steps_per_s"].items():
+        added = "" if prev is None else f"{r['us_per_step'][k] - r['us_per_step'][prev]:9.0f}"
+        print(f"{k:8s} {v:9.0f} {r['us_per_step'][k]:9.0f} {added}")
+        prev = k
+    print(f"rig.step(1 ms) alone: {r['rig_step_us_alone']:.0f} us")
+    sp = r["runner_us_per_step"]
+    print(f"runner step: {sp['recv_wait_s']:.0f} us in bus.recv (the node's tick, its telemetry and heartbeat "
+          f"frames, the guest's scheduling), {sp['rig_s']:.0f} us rig + recording, {sp['other_s']:.0f} us the rest "
+          f"(encode, send, decode, log, events)")
+    ratio = r["runner_vs_raw"]
+    print(f"runner / raw round trip: {100 * ratio:.0f} %")
+    if ratio < 0.8:
+        adds = r["added_us_per_step"]
+        worst = max(adds, key=lambda k: adds[k])
+        print(f"more than 20 % below the raw round trip: the largest addition is {worst} "
+              f"({adds[worst]:.0f} us per step)")
+    (out / "bench.json").write_text(json.dumps(r, indent=2) + "\n")
+    print(f"written: {out / 'bench.json'}")
+    return 0

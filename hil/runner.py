@@ -1,0 +1,614 @@
+"""The HIL runner: a scenario's controllers, each on its own firmware node and its
+own simulated rig, driven tick by tick over CAN through the plant bridge.
+
+One lane = one controller = one CAN node (ids 1, 2, ...) = one Rig built from the
+same parameters and seed, so the controllers of a scenario see identical plants
+and are compared side by side in one run. Per control tick and lane the runner
+sends PLANT_SENSOR (the rig's sensor counts, sequence number), waits for the
+node's PLANT_ACTUATOR of that sequence number, applies its DAC counts to the rig
+and advances the rig by one control period. With pma-fw-host in lockstep mode
+the PLANT_SENSOR frame is the node's tick, so simulated time is exact however
+slow the bus is. Against a board (real time, --board) the runner paces itself at
+the board's tick rate instead.
+
+Configuration goes over CAN exactly as a user's would, through the pmactl
+client: parameters by name (SET), ARM, START, STOP, DISARM. Everything on the
+bus goes to a python-can log (.blf or .asc), the signals to signals.npz, the
+figures of merit to summary.json (hil/metrics.py).
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+import can
+import numpy as np
+
+from pmactl.client import NoReply, PmaError, PmaNode, frame_filters
+
+from .fw_process import FW_HOST, BUILD_HINT, FirmwareProcess
+from .metrics import lane_metrics
+from .reference import reference_function
+from .rig import Rig
+from .scenario import Controller, Scenario, protocol
+
+STOP_FILE = "STOP"  # created in the output directory: stop the run cleanly (Ctrl-C from outside the guest)
+PHASE_IDLE, PHASE_ARMED, PHASE_RUNNING = 0, 1, 2
+TELEM_FIELDS = {  # (message, signal) -> name in the recording
+    ("TELEM_A", "TimeMs"): "time_ms", ("TELEM_A", "XCm"): "x_cm",
+    ("TELEM_B", "XrCm"): "xr_cm", ("TELEM_B", "ECm"): "e_cm",
+    ("TELEM_C", "U"): "u", ("TELEM_C", "VCmS"): "v_cm_s",
+    ("TELEM_D", "Internal1"): "internal1", ("TELEM_D", "Internal2"): "internal2",
+    ("TELEM_E", "PressureKpa"): "pressure_kpa", ("TELEM_E", "CtrlFlags"): "ctrl_flags",
+    ("TELEM_E", "Breaches"): "breaches",
+}
+
+
+class RunError(RuntimeError):
+    """The run could not go on (the firmware died, did not answer, refused)."""
+
+
+@dataclass
+class Lane:
+    index: int
+    ctrl: Controller
+    node: int
+    rig: Rig
+    client: PmaNode
+    params: dict[str, float | int]
+    fw: FirmwareProcess | None = None
+    seq: int = 0
+    host_heartbeat: bool = True
+    hb_counter: int = 0
+    state: str = "BOOT"
+    fault_code: str = "NONE"
+    start_result: str = ""
+    last_dac: int = 0
+    last_active: int = 0
+    telem: dict[str, list[float]] = field(default_factory=dict)
+    telem_row: dict[str, float] = field(default_factory=dict)
+
+
+@dataclass
+class RunOptions:
+    out: Path
+    quick: bool = False
+    bus_config: dict[str, Any] = field(default_factory=lambda: {"interface": "socketcan", "channel": "vcan0"})
+    board: bool = False             # drive an external node in real time (no pma-fw-host, no lockstep)
+    board_node: int = 1
+    log_format: str = "blf"         # python-can log of the bus: blf or asc
+    progress: bool = True
+    reply_timeout_s: float = 2.0
+
+
+class Recorder:
+    """Per-lane signals at every tick, in preallocated arrays."""
+
+    FIELDS = {"phase": np.int8, "run_step": np.int64, "counts": np.int32, "dac_counts": np.int32,
+              "output_active": np.int8, "sample_status": np.int8, "x_true_cm": np.float64,
+              "v_true_cm_s": np.float64, "x_meas_cm": np.float64, "p_kpa": np.float64,
+              "p_cmd_kpa": np.float64, "load_mass_kg": np.float64, "disturbance_n": np.float64}
+
+    def __init__(self, lanes: int, ticks: int) -> None:
+        self.n = 0
+        self.data = [{k: np.zeros(ticks, dtype=t) for k, t in self.FIELDS.items()} for _ in range(lanes)]
+
+    def trimmed(self, lane: int) -> dict[str, np.ndarray]:
+        return {k: v[:self.n] for k, v in self.data[lane].items()}
+
+
+class Progress:
+    """A one-line progress bar on stderr (a line per 10 % when stderr is not a terminal)."""
+
+    def __init__(self, total: int, label: str, enabled: bool) -> None:
+        self.total, self.label, self.enabled = total, label, enabled
+        self.tty = sys.stderr.isatty()
+        self.t0 = time.monotonic()
+        self.last = 0.0
+        self.last_decile = -1
+
+    def update(self, done: int, extra: str = "") -> None:
+        if not self.enabled:
+            return
+        now = time.monotonic()
+        frac = done / max(self.total, 1)
+        if self.tty:
+            if now - self.last < 0.25 and done < self.total:
+                return
+            self.last = now
+            bar = "#" * int(frac * 30)
+            rate = done / max(now - self.t0, 1e-9)
+            eta = (self.total - done) / rate if rate > 0 else 0
+            sys.stderr.write(f"\r{self.label} [{bar:<30}] {100 * frac:5.1f}% {rate:6.0f} ticks/s "
+                             f"eta {eta:4.0f} s {extra}   ")
+            sys.stderr.flush()
+            if done >= self.total:
+                sys.stderr.write("\n")
+        else:
+            decile = int(frac * 10)
+            if decile != self.last_decile:
+                self.last_decile = decile
+                print(f"{self.label}: {100 * frac:3.0f}% ({done}/{self.total} ticks, "
+                      f"{now - self.t0:.0f} s) {extra}", file=sys.stderr, flush=True)
+
+
+class Runner:
+    def __init__(self, scenario: Scenario, opts: RunOptions) -> None:
+        self.sc = scenario
+        self.opts = opts
+        self.proto = protocol()
+        self.out = opts.out
+        self.lanes: list[Lane] = []
+        self.bus: can.BusABC | None = None
+        self.logger: can.Listener | None = None
+        self.tick = 0
+        self.period_s = 1.0
+        self.interrupted = False
+        self.errors: list[str] = []
+        self.bench: dict[str, float] = {}
+        self._dispatch: dict[int, tuple[int, str]] = {}
+        self.t_recv_s = 0.0     # wall time in bus.recv (waiting for the nodes, and receiving)
+        self.t_rig_s = 0.0      # wall time stepping the rigs and recording
+
+    # ------------------------------------------------------------- set-up --
+    def _open(self) -> None:
+        self.out.mkdir(parents=True, exist_ok=True)
+        stop = self.out / STOP_FILE
+        if stop.exists():
+            stop.unlink()
+        if not self.opts.board and not FW_HOST.exists():
+            raise RunError(f"{FW_HOST} not found: build it first ({BUILD_HINT})")
+        cfg = dict(self.opts.bus_config)
+        try:
+            self.bus = can.Bus(**cfg)
+        except (can.CanError, OSError, ImportError, ValueError) as e:
+            raise RunError(f"cannot open the CAN bus {cfg}: {e}") from e
+        self.logger = can.Logger(str(self.out / f"bus.{self.opts.log_format}"))
+        nodes = [self.opts.board_node] if self.opts.board else list(range(1, len(self.sc.controllers) + 1))
+        if self.opts.board and len(self.sc.controllers) != 1:
+            raise RunError("--board runs one controller at a time: choose it with --controller LABEL")
+        msgs = ["PLANT_ACTUATOR", "COMMAND_ACK", "PARAM_RESP", "HEARTBEAT", "TELEM_A", "TELEM_B",
+                "TELEM_C", "TELEM_D", "TELEM_E"]
+        filters: list[dict[str, Any]] = []
+        for n in nodes:
+            filters += frame_filters(self.proto, msgs, n)
+        self.bus.set_filters(filters)
+        rp = self.sc.rig_params()
+        for i, (ctrl, node) in enumerate(zip(self.sc.controllers, nodes)):
+            client = PmaNode(self.bus, node, self.proto, timeout_s=self.opts.reply_timeout_s)
+            client.raw_listeners.append(self._log)
+            lane = Lane(i, ctrl, node, Rig(rp, seed=self.sc.seed), client, self.sc.node_params(ctrl))
+            self.lanes.append(lane)
+            for name in msgs:
+                self._dispatch[self.proto.frame_id(name, node)] = (i, name)
+        tick_hz = {float(lane.params.get("sys.tick_hz", self.proto.param("sys.tick_hz").default))
+                   for lane in self.lanes}
+        if len(tick_hz) != 1:
+            raise RunError("all controllers of a scenario must run at the same sys.tick_hz")
+        self.period_s = 1.0 / tick_hz.pop()
+
+    def _log(self, msg: can.Message) -> None:
+        if self.logger is not None:
+            self.logger.on_message_received(msg)
+
+    def _start_firmware(self) -> None:
+        if self.opts.board:
+            return
+        fwdir = self.out / "firmware"
+        fwdir.mkdir(exist_ok=True)
+        channel = str(self.opts.bus_config.get("channel", "vcan0"))
+        for lane in self.lanes:
+            store = fwdir / f"node{lane.node}.nvm"
+            if store.exists():
+                store.unlink()      # every run starts from the defaults and sets what it needs
+            lane.fw = FirmwareProcess(fwdir, ["--node", str(lane.node), "--storage", str(store), "--lockstep"],
+                                      channel=channel).start()
+        for lane in self.lanes:
+            self._wait_heartbeat(lane, 10.0)
+
+    def _wait_heartbeat(self, lane: Lane, timeout_s: float) -> dict[str, Any]:
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            if lane.fw is not None and lane.fw.proc is not None and lane.fw.proc.poll() is not None:
+                raise RunError(f"pma-fw-host (node {lane.node}) exited with status {lane.fw.proc.returncode}:\n"
+                               f"{lane.fw.output()}")
+            try:
+                sig = lane.client.wait_for("HEARTBEAT", timeout_s=0.5)
+            except NoReply:
+                continue
+            self._note_heartbeat(lane, sig)
+            return sig
+        raise RunError(f"no HEARTBEAT from node {lane.node} within {timeout_s:g} s")
+
+    def _note_heartbeat(self, lane: Lane, sig: dict[str, Any]) -> None:
+        lane.state = self.proto.state_names.get(int(sig["State"]), str(sig["State"]))
+        lane.fault_code = self.proto.fault_names.get(int(sig["FaultCode"]), str(sig["FaultCode"]))
+
+    def _configure(self) -> None:
+        for lane in self.lanes:
+            for name, value in lane.params.items():
+                try:
+                    lane.client.set(name, value)
+                except PmaError as e:
+                    raise RunError(f"node {lane.node} ({lane.ctrl.label}): {e}") from e
+            lane.params_read_back = lane.client.snapshot()  # type: ignore[attr-defined]
+
+    # ------------------------------------------------------------- ticking --
+    def _tick(self, rec: Recorder, phase: int, run_step: int) -> None:
+        """One control tick of every lane: sensor out, actuator in, rig step."""
+        assert self.bus is not None
+        sensor_def = self.proto.messages["PLANT_SENSOR"]
+        for lane in self.lanes:
+            lane.seq = (lane.seq + 1) & 0xFF
+            counts = lane.rig.sensor_counts()
+            data = sensor_def.encode({"Seq": lane.seq, "RawCounts": counts}, scaling=False)
+            msg = can.Message(arbitration_id=self.proto.frame_id("PLANT_SENSOR", lane.node), data=data,
+                              is_extended_id=False, timestamp=time.time(), is_rx=False)
+            self.bus.send(msg)
+            self._log(msg)
+            r = rec.data[lane.index]
+            r["counts"][rec.n] = counts
+        pending = {lane.index for lane in self.lanes}
+        deadline = time.monotonic() + self.opts.reply_timeout_s
+        act_def = self.proto.messages["PLANT_ACTUATOR"]
+        while pending:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                self._check_alive()
+                raise RunError(f"no PLANT_ACTUATOR from node(s) "
+                               f"{sorted(self.lanes[i].node for i in pending)} within {self.opts.reply_timeout_s:g} s "
+                               f"at tick {self.tick}")
+            t_wait = time.perf_counter()
+            msg = self.bus.recv(left)
+            self.t_recv_s += time.perf_counter() - t_wait
+            if msg is None:
+                continue
+            self._log(msg)
+            found = self._dispatch.get(msg.arbitration_id)
+            if found is None or msg.is_error_frame or msg.is_remote_frame:
+                continue
+            i, name = found
+            lane = self.lanes[i]
+            if name == "PLANT_ACTUATOR":
+                if len(msg.data) != 4:
+                    continue
+                sig = act_def.decode(bytes(msg.data), decode_choices=False, scaling=False)
+                if sig["Seq"] != lane.seq or i not in pending:
+                    continue
+                pending.discard(i)
+                lane.last_dac, lane.last_active = int(sig["DacCounts"]), int(sig["OutputActive"])
+                r = rec.data[i]
+                r["dac_counts"][rec.n] = lane.last_dac
+                r["output_active"][rec.n] = lane.last_active
+                r["sample_status"][rec.n] = int(sig["Sample"])
+            else:
+                self._other_frame(lane, name, msg)
+        t_rig = time.perf_counter()
+        for lane in self.lanes:
+            rig = lane.rig
+            rig.apply_dac(lane.last_dac)
+            r = rec.data[lane.index]
+            k = rec.n
+            r["phase"][k] = phase
+            r["run_step"][k] = run_step
+            r["x_true_cm"][k] = rig.x_cm
+            r["v_true_cm_s"][k] = rig.v_cm_s
+            r["p_kpa"][k] = rig.p_kpa
+            r["p_cmd_kpa"][k] = rig.p_cmd_kpa
+            r["load_mass_kg"][k] = rig.load_mass_kg
+            r["disturbance_n"][k] = rig.disturbance_force_n
+            rig.step(self.period_s)
+        self.t_rig_s += time.perf_counter() - t_rig
+        rec.n += 1
+        self.tick += 1
+
+    def _other_frame(self, lane: Lane, name: str, msg: can.Message) -> None:
+        try:
+            sig = self.proto.decode(name, bytes(msg.data))
+        except Exception:       # a frame of the wrong length: the bus log keeps it
+            return
+        if name == "HEARTBEAT":
+            self._note_heartbeat(lane, sig)
+        elif name.startswith("TELEM_"):
+            for (m, s), key in TELEM_FIELDS.items():
+                if m == name:
+                    lane.telem_row[key] = float(sig[s])
+            if name == "TELEM_E":      # the last of a telemetry group (mask 0x1F)
+                for key in TELEM_FIELDS.values():
+                    lane.telem.setdefault(key, []).append(lane.telem_row.get(key, math.nan))
+                lane.telem_row = {}
+
+    def _check_alive(self) -> None:
+        for lane in self.lanes:
+            if lane.fw is not None and lane.fw.proc is not None and lane.fw.proc.poll() is not None:
+                raise RunError(f"pma-fw-host (node {lane.node}) exited with status {lane.fw.proc.returncode}:\n"
+                               f"{lane.fw.output()[-4000:]}")
+
+    def _command_all(self, command: str, lanes: list[Lane] | None = None) -> dict[int, str]:
+        out = {}
+        for lane in lanes or self.lanes:
+            ack = lane.client.command(command, check=False)
+            out[lane.index] = self.proto.status_name(ack.result)
+            lane.state = self.proto.state_names.get(ack.state, str(ack.state))
+        return out
+
+    def _host_heartbeats(self) -> None:
+        for lane in self.lanes:
+            if lane.host_heartbeat:
+                lane.client.host_heartbeat(lane.hb_counter)
+                lane.hb_counter = (lane.hb_counter + 1) & 0xFF
+
+    def _apply_event(self, action: str, value: float) -> None:
+        for lane in self.lanes:
+            rig = lane.rig
+            if action == "load_mass":
+                rig.set_load_mass(value)
+            elif action == "bias_force":
+                rig.set_bias_force(value)
+            elif action == "disturbance":
+                rig.set_disturbance(value)
+            elif action == "wire_break":
+                rig.break_wire(bool(value))
+            elif action == "sensor_block":
+                rig.set_sensor_blocked(bool(value))
+            elif action == "host_heartbeat":
+                lane.host_heartbeat = bool(value)
+
+    def _stop_requested(self) -> bool:
+        return (self.out / STOP_FILE).exists()
+
+    def _pace(self, t_next: float) -> None:
+        """Real-time mode (a board): wait for the next tick's wall-clock time."""
+        while True:
+            left = t_next - time.monotonic()
+            if left <= 0:
+                return
+            if left > 0.002:
+                time.sleep(left - 0.001)
+
+    # ----------------------------------------------------------------- run --
+    def run(self) -> dict[str, Any]:
+        t_wall0 = time.monotonic()
+        sc = self.sc
+        duration = sc.duration(self.opts.quick)
+        try:
+            self._open()
+            self._start_firmware()
+            self._configure()
+            n_settle = max(1, round(sc.settle_s / self.period_s))
+            n_armed = max(1, round(sc.armed_s / self.period_s))
+            n_run = max(1, round(duration / self.period_s))
+            rec = Recorder(len(self.lanes), n_settle + n_armed + n_run + 10)
+            self.rec = rec
+            hb_every = max(1, round(0.1 / self.period_s))   # HOST_HEARTBEAT every 100 ms of control time
+            self._host_heartbeats()
+            for _ in range(n_settle):
+                self._tick(rec, PHASE_IDLE, -1)
+            arm = self._command_all("ARM")
+            bad = {self.lanes[i].ctrl.label: r for i, r in arm.items() if r != "OK"}
+            if bad:
+                raise RunError(f"ARM refused: {bad} (see the rig's idle position and safety.* in docs/hil.md)")
+            for k in range(n_armed):
+                if k % hb_every == 0:
+                    self._host_heartbeats()
+                self._tick(rec, PHASE_ARMED, -1)
+            start = self._command_all("START")
+            for i, r in start.items():
+                self.lanes[i].start_result = r
+            running = [lane for lane in self.lanes if lane.start_result == "OK"]
+            events = list(sc.events)
+            progress = Progress(n_run, f"{sc.name} ({', '.join(c.label for c in sc.controllers)})",
+                                self.opts.progress)
+            t_loop0 = time.monotonic()
+            self.t_recv_s = self.t_rig_s = 0.0
+            t_next = t_loop0
+            steps_done = 0
+            if running:
+                for n in range(n_run):
+                    t = n * self.period_s
+                    while events and events[0].t_s <= t + 1e-12:
+                        ev = events.pop(0)
+                        self._apply_event(ev.action, ev.value)
+                    if n % hb_every == 0:
+                        self._host_heartbeats()
+                        if self._stop_requested():
+                            self.interrupted = True
+                            break
+                    if self.opts.board:
+                        t_next += self.period_s
+                        self._pace(t_next)
+                    self._tick(rec, PHASE_RUNNING, n)
+                    steps_done += 1
+                    if n % 250 == 0:
+                        progress.update(n)
+                progress.update(steps_done if self.interrupted else n_run)
+            loop_s = time.monotonic() - t_loop0
+            self.bench = {"run_ticks": steps_done, "lanes": len(self.lanes), "loop_wall_s": loop_s,
+                          "ticks_per_s": steps_done / loop_s if loop_s > 0 else math.nan,
+                          "node_steps_per_s": steps_done * len(self.lanes) / loop_s if loop_s > 0 else math.nan,
+                          "recv_wait_s": self.t_recv_s, "rig_s": self.t_rig_s,
+                          "other_s": loop_s - self.t_recv_s - self.t_rig_s}
+            # a few ticks more so that a fault found in the last tick shows in the heartbeat
+            for _ in range(5):
+                self._tick(rec, PHASE_RUNNING, -2)
+            for lane in self.lanes:
+                self._wait_heartbeat(lane, 3.0)
+            final = {lane.index: (lane.state, lane.fault_code, lane.last_dac, lane.last_active) for lane in self.lanes}
+        except KeyboardInterrupt:
+            self.interrupted = True
+            final = {lane.index: (lane.state, lane.fault_code, lane.last_dac, lane.last_active) for lane in self.lanes}
+        except RunError as e:
+            self.errors.append(str(e))
+            final = {lane.index: (lane.state, lane.fault_code, lane.last_dac, lane.last_active) for lane in self.lanes}
+        finally:
+            self._shutdown()
+        summary = self._summarise(final, duration, time.monotonic() - t_wall0)
+        return summary
+
+    def _shutdown(self) -> None:
+        """STOP and DISARM every node that is still active, stop the firmware
+        processes (SIGTERM, exit status checked), close the log and the bus."""
+        for lane in self.lanes:
+            try:
+                if lane.state in ("RUNNING",):
+                    lane.client.command("STOP", check=False)
+                if lane.state in ("RUNNING", "ARMED"):
+                    lane.client.command("DISARM", check=False)
+            except (NoReply, can.CanError, OSError) as e:
+                self.errors.append(f"node {lane.node}: stopping: {e}")
+        for lane in self.lanes:
+            if lane.fw is not None:
+                try:
+                    lane.fw.stop(expect_status=0)
+                except AssertionError as e:
+                    self.errors.append(f"node {lane.node}: {e}")
+        if self.logger is not None:
+            self.logger.stop()
+            self.logger = None
+        if self.bus is not None:
+            self.bus.shutdown()
+            self.bus = None
+
+    # ------------------------------------------------------------- results --
+    def _summarise(self, final: dict[int, tuple[str, str, int, int]], duration: float,
+                   wall_s: float) -> dict[str, Any]:
+        sc = self.sc
+        windows = sc.windows_for(duration)
+        rec: Recorder | None = getattr(self, "rec", None)
+        xr_fn = reference_function(sc.reference)
+        arrays: dict[str, np.ndarray] = {}
+        lanes_out: dict[str, Any] = {}
+        summary: dict[str, Any] = {
+            "scenario": sc.name, "title": sc.title, "file": str(sc.path) if sc.path else None,
+            "quick": self.opts.quick, "duration_s": duration, "period_s": self.period_s,
+            "windows": [list(w) for w in windows], "paper": sc.paper,
+            "rmste": {}, "max_abs_error_after_tu": {}, "constraint_violations": {}, "barrier_breaches": {},
+            "fault_code": {}, "state": {}, "start_result": {}, "controllers": lanes_out,
+            "expect": {"state": sc.expect.state, "fault_code": sc.expect.fault_code,
+                       "start_result": sc.expect.start_result},
+            "interrupted": self.interrupted, "errors": self.errors, "benchmark": self.bench,
+            "wall_s": wall_s, "bus_log": f"bus.{self.opts.log_format}", "signals": "signals.npz",
+        }
+        band = sc.band_cm()
+        needed = static_pressure_for(sc)
+        for lane in self.lanes:
+            label = lane.ctrl.label
+            state, fault, dac, active = final.get(lane.index, (lane.state, lane.fault_code, 0, 0))
+            summary["fault_code"][label] = fault
+            summary["state"][label] = state
+            summary["start_result"][label] = lane.start_result
+            info: dict[str, Any] = {"mode": lane.ctrl.mode, "node": lane.node, "description": lane.ctrl.description,
+                                    "params_set": lane.params,
+                                    "final_dac_counts": dac, "final_output_active": active}
+            if rec is None or rec.n == 0:
+                lanes_out[label] = info
+                continue
+            d = rec.trimmed(lane.index)
+            for k, v in d.items():
+                arrays[f"{label}__{k}"] = v
+            telem = {k: np.asarray(v, dtype=float) for k, v in lane.telem.items()}
+            if "time_ms" in telem:
+                telem["t_s"] = telem["time_ms"] / 1000.0
+            for k, v in telem.items():
+                arrays[f"{label}__telem_{k}"] = v
+            scale = lane.rig.params.firmware_scaling()
+            x_meas = scale["adc.offset_cm"] + scale["adc.gain_cm_per_count"] * d["counts"].astype(float)
+            arrays[f"{label}__x_meas_cm"] = x_meas
+            run = d["run_step"] >= 0
+            t = d["run_step"][run] * self.period_s
+            xr = xr_fn(t)
+            e = x_meas[run] - xr
+            arrays[f"{label}__t_s"] = t
+            arrays[f"{label}__xr_cm"] = xr
+            arrays[f"{label}__e_cm"] = e
+            info["reference_check_max_abs_cm"] = self._reference_check(telem, t, xr, x_meas[run])
+            if len(t) == 0:
+                lanes_out[label] = info
+                continue
+            # the static pressure the reference needs (every 10 ms), for the chattering ratio
+            sub = slice(None, None, max(1, round(0.01 / self.period_s)))
+            p_need = needed(xr[sub])
+            ok = np.isfinite(p_need)
+            m = lane_metrics(label, lane.ctrl.mode, t, e, x_meas[run], d["x_true_cm"][run], d["v_true_cm_s"][run],
+                             d["p_cmd_kpa"][run], windows, band, sc.t_u_s(lane.ctrl),
+                             sc.w1_cm(lane.ctrl) if lane.ctrl.mode == "PPC" else None,
+                             telem if "t_s" in telem else None,
+                             p_need[ok] if ok.sum() > 1 else None, t[sub][ok] if ok.sum() > 1 else None)
+            m.final_state, m.final_fault_code = state, fault
+            info.update(m.to_dict())
+            info["reference_unreachable_samples"] = int((~ok).sum())
+            summary["rmste"][label] = m.rmste_cm
+            summary["max_abs_error_after_tu"][label] = m.max_abs_error_after_tu_cm
+            summary["constraint_violations"][label] = m.constraint_violations
+            summary["barrier_breaches"][label] = m.barrier_breaches
+            lanes_out[label] = info
+        ok = (not self.errors and not self.interrupted and all(
+            summary["state"].get(c.label) == sc.expect.state and summary["fault_code"].get(c.label) == sc.expect.fault_code
+            and summary["start_result"].get(c.label) == sc.expect.start_result for c in sc.controllers))
+        summary["expect_met"] = ok
+        if arrays:
+            np.savez_compressed(self.out / "signals.npz", **arrays)
+        (self.out / "summary.json").write_text(json.dumps(_jsonable(summary), indent=2) + "\n")
+        return summary
+
+    def _reference_check(self, telem: dict[str, np.ndarray], t: np.ndarray, xr: np.ndarray,
+                         x_meas: np.ndarray) -> float | None:
+        """max |x_r(harness) - x_r(firmware, TELEM_B)| over the telemetry samples, and a
+        RunError-worthy note when the firmware's x (TELEM_A) is not the harness's
+        measured x at the same tick (the time bases disagree)."""
+        if "t_s" not in telem or not len(telem["t_s"]) or not len(t):
+            return None
+        idx = np.round(telem["t_s"] / self.period_s).astype(np.int64)
+        ok = (idx >= 0) & (idx < len(t))
+        if not ok.any():
+            return None
+        dx = np.abs(telem["x_cm"][ok] - x_meas[idx[ok]])
+        if float(np.max(dx)) > 1e-4:
+            self.errors.append(f"telemetry x differs from the harness's measured x by {float(np.max(dx)):.3g} cm: "
+                               "the time bases disagree")
+        return float(np.max(np.abs(telem["xr_cm"][ok] - xr[idx[ok]])))
+
+
+def static_pressure_for(sc: Scenario) -> Callable[[np.ndarray], np.ndarray]:
+    """x [cm] -> the steady pressure command [kPa] that holds it on the scenario's rig
+    (static curve without friction, initial load; NaN where 0..p_max does not reach)."""
+    rig = Rig(sc.rig_params(), seed=sc.seed)
+    p = np.linspace(45.0, rig.params.regulator.p_max_kpa, 1000)
+    x = np.array([rig.static_x_cm(float(v)) for v in p])
+    order = np.argsort(x)
+
+    def f(xq: np.ndarray) -> np.ndarray:
+        out = np.interp(xq, x[order], p[order])
+        out[(xq < x.min()) | (xq > x.max())] = math.nan
+        return out
+    return f
+
+
+def _jsonable(o: Any) -> Any:
+    if isinstance(o, dict):
+        return {str(k): _jsonable(v) for k, v in o.items()}
+    if isinstance(o, (list, tuple)):
+        return [_jsonable(v) for v in o]
+    if isinstance(o, (np.floating, float)):
+        return None if not math.isfinite(float(o)) else float(o)
+    if isinstance(o, (np.integer,)):
+        return int(o)
+    return o
+
+
+def run_scenario(scenario: Scenario, opts: RunOptions,
+                 on_summary: Callable[[dict[str, Any]], None] | None = None) -> dict[str, Any]:
+    summary = Runner(scenario, opts).run()
+    if on_summary:
+        on_summary(summary)
+    return summary
+
+
+def inside_guest() -> bool:
+    return os.environ.get("PMA_HIL_INSIDE") == "1"
