@@ -18,8 +18,19 @@
  * out, Seq echoed), then PPC, MFAC and PID holding -2 cm in ADC mode. Each
  * asserts RUNNING without a fault throughout, |e| < w1 after t_u (PPC), and
  * the hold error at the end. The control time is 10 s for CASE1 (6 s for the
- * holds) on every core. */
+ * holds) on every core.
+ *
+ * The board's main-loop glue (firmware/targets/stm32g474/board_app.c, the
+ * part of the STM32G474 firmware that is not register access) runs the last
+ * two: board_start() brings the node up with the board's platform
+ * (watchdog first, ADC/DAC, storage in one block per slot), every plant tick
+ * goes through board_step(), and the status LED it drives is checked against
+ * the state at every tick. Once on the ADC (PID hold), once over the plant
+ * bridge enabled by the parameter sys.plant_bridge while disarmed (PPC on
+ * CASE1, the DAC left alone), as true HIL with a board does. Under the
+ * cortex-m4f preset this is the board's own code compiled for its core. */
 #include "app_test.h"
+#include "board_app.h"
 
 #define G_PLANT 100.0
 #define D_PLANT 20.0
@@ -55,6 +66,61 @@ static void plant_advance(double p_kpa)
 static uint8_t seq;
 static uint32_t hb_count;
 
+/* the board glue in the loop (0: pma_app_step() directly) */
+static int use_board;
+static board_t board;
+static uint32_t led_writes;
+static int led_level = -1;
+
+void board_led_write(int on)
+{
+    led_level = on;
+    ++led_writes;
+}
+
+/* One main-loop iteration, through the board's glue when it is in use;
+ * then the LED must show the state (board_app.h). */
+static void loop_step(void)
+{
+    if (!use_board) {
+        step();
+        return;
+    }
+    assert_status(board_step(&board, &app), PMA_OK);
+    drain();
+    assert_int_equal(led_level, board_led_on(app.state, pma_hal_time_us() / 1000u));
+    assert_int_equal(board.led, led_level);
+}
+
+/* A fresh node: the test harness's start, or the board's. */
+static void start_node(uint8_t bridge, float x_cm)
+{
+    if (!use_board) {
+        start_with(bridge, x_cm);
+        return;
+    }
+    pma_fake_reset();
+    pma_params_defaults(&app.params);
+    pma_fake_adc_set(counts_at(x_cm));
+    led_writes = 0;
+    led_level = -1;
+    assert_status(board_start(&board, &app, NULL), PMA_OK);
+    plat = app.plat; /* the board's platform, for the harness's helpers */
+    assert_int_equal(plat.plant_bridge, 0);            /* never forced on a board */
+    assert_int_equal(plat.store_blocks_per_slot, BOARD_STORE_BLOCKS_PER_SLOT);
+    assert_int_equal(plat.watchdog_ms, BOARD_WATCHDOG_MS);
+    assert_true(pma_fake_watchdog_running());
+    assert_int_equal(pma_fake_can_bitrate_bps(), PMA_HAL_CAN_DEFAULT_BITRATE_BPS);
+    assert_state(app.state, PMA_STATE_IDLE);
+    assert_int_equal(led_writes, 1u);
+    cap_clear();
+    drain();
+    if (bridge) {
+        set_u32(PMA_PARAM_SYS_PLANT_BRIDGE, 1u); /* allowed: disarmed */
+        assert_int_equal(pma_app_bridge_on(&app), 1);
+    }
+}
+
 /* One tick with the plant: the sample of x goes in (ADC or PLANT_SENSOR),
  * the node steps, its pressure command drives the plant for one period. */
 static void tick_with_plant(void)
@@ -62,10 +128,10 @@ static void tick_with_plant(void)
     const uint16_t raw = counts_at((float)pl.x);
     if (hb_count++ % 100u == 0) send_host_heartbeat((uint8_t)hb_count);
     uint16_t counts;
-    if (plat.plant_bridge) {
+    if (pma_app_bridge_on(&app)) {
         send_sample(++seq, raw);
         cap_clear();
-        step();
+        loop_step();
         const struct pma_proto_plant_actuator_t m = last_actuator();
         assert_int_equal(m.seq, seq);
         assert_int_equal(m.sample, PMA_SAMPLE_NEW);
@@ -73,7 +139,7 @@ static void tick_with_plant(void)
     } else {
         pma_fake_adc_set(raw);
         cap_clear();
-        step();
+        loop_step();
         counts = dac_now();
     }
     plant_advance((double)counts / 4.55);
@@ -94,7 +160,7 @@ static result_t run(uint8_t bridge, uint32_t mode, uint32_t ref, float offset_cm
     pl.v = 0.0;
     seq = 0;
     hb_count = 0;
-    start_with(bridge, (float)pl.x);
+    start_node(bridge, (float)pl.x);
     for (int i = 0; i < 5; ++i) tick_with_plant();
     set_f32(PMA_PARAM_ACT_P0_KPA, 150.0f);
     command_ok(PMA_CMD_SELECT_CONTROLLER, (uint8_t)mode, PMA_OK);
@@ -194,6 +260,40 @@ static void test_pid_hold_adc(void **state)
     assert_true(r.min_x > -3.0 && r.max_x < 0.0);
 }
 
+/* The board glue, ADC and DAC: PID holding -2 cm; the LED blinks in IDLE
+ * and ARMED and is steady on while RUNNING. */
+static void test_board_glue_pid_hold_adc(void **state)
+{
+    (void)state;
+    use_board = 1;
+    const result_t r = run(0, PMA_CTRL_MODE_PID, PMA_REF_KIND_HOLD, -2.0f, 6, 2.0f, xr_hold);
+    use_board = 0;
+    assert_true(r.final_abs_e < 0.05);
+    assert_true(r.min_x > -3.0 && r.max_x < 0.0);
+    assert_true(pma_fake_dac_write_count() > 6000u); /* the DAC, every tick */
+    assert_int_equal(led_level, 1);                  /* RUNNING */
+    /* IDLE and ARMED before it blinked: the level changed several times */
+    assert_true(board.led_changes >= 4u);
+}
+
+/* The board glue over the plant bridge, switched on by sys.plant_bridge while
+ * disarmed (true HIL): PPC on CASE1; the bridge cannot be switched off while
+ * running and the DAC is not written while bridged. */
+static void test_board_glue_ppc_case1_bridge_parameter(void **state)
+{
+    (void)state;
+    use_board = 1;
+    const result_t r = run(1, PMA_CTRL_MODE_PPC, PMA_REF_KIND_CASE1, -1.5f, 4, 2.0f, xr_case1);
+    assert_true(r.max_e_after_tu < 0.2);
+    assert_true(r.min_x > -3.0 && r.max_x < 0.0);
+    const uint32_t dac_writes = pma_fake_dac_write_count();
+    assert_status(set_param(PMA_PARAM_SYS_PLANT_BRIDGE, vu(0)), PMA_ERR_STATE);
+    for (int i = 0; i < 100; ++i) tick_with_plant(); /* still bridged, still tracking */
+    assert_state(app.state, PMA_STATE_RUNNING);
+    assert_int_equal(pma_fake_dac_write_count(), dac_writes);
+    use_board = 0;
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -201,6 +301,8 @@ int main(void)
         cmocka_unit_test(test_ppc_hold_adc),
         cmocka_unit_test(test_mfac_hold_adc),
         cmocka_unit_test(test_pid_hold_adc),
+        cmocka_unit_test(test_board_glue_pid_hold_adc),
+        cmocka_unit_test(test_board_glue_ppc_case1_bridge_parameter),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -14,7 +14,7 @@ void pma_hal_stm32g474_system_init(void)
 {
     reset_cause = g4_reset_latch();
     reset_cause_latched = 1;
-    clock_source = g4_clock_init(1);
+    clock_source = g4_clock_init(G4_HSE_HZ != 0u); /* HSE 0: HSI16 only */
     g4_time_init(g4_clock_sysclk_hz());
     /* the LED pin, so that the board can signal even when init fails */
     g4_rmw(g4_io.rcc, G4_RCC_AHB2ENR_OFFSET, 0u, G4_RCC_AHB2ENR_GPIOAEN_Msk);
