@@ -70,6 +70,10 @@ def _rerun_in_guest(argv: list[str], out: Path) -> int:
                 return 130
 
 
+def _interrupt(signum: int, frame: object) -> None:
+    raise KeyboardInterrupt(f"signal {signum}")
+
+
 def cmd_list(_: argparse.Namespace) -> int:
     for name in scn.available():
         try:
@@ -108,6 +112,10 @@ def cmd_run(args: argparse.Namespace, argv: list[str]) -> int:
         return _rerun_in_guest(argv, out)
     opts = RunOptions(out=out, quick=args.quick, bus_config=cfg, board=args.board, board_node=args.node,
                       log_format=args.log_format, progress=not args.no_progress)
+    # Ctrl-C and SIGTERM stop the run cleanly (even when started with SIGINT ignored,
+    # as background jobs of a non-interactive shell are)
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    signal.signal(signal.SIGTERM, _interrupt)
     try:
         summary = Runner(sc, opts).run()
     except RunError as e:

@@ -35,7 +35,10 @@ class FirmwareProcess:
         env = dict(os.environ, ASAN_OPTIONS="detect_leaks=1:abort_on_error=0",
                    UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1")
         self.log = self.log_path.open("wb")
-        self.proc = subprocess.Popen(self.args, stdout=self.log, stderr=subprocess.STDOUT, env=env)
+        # its own session: a Ctrl-C in the terminal reaches the harness, which then
+        # stops the node over CAN and with SIGTERM, in that order
+        self.proc = subprocess.Popen(self.args, stdout=self.log, stderr=subprocess.STDOUT, env=env,
+                                     start_new_session=True)
         return self
 
     def output(self) -> str:

@@ -1,12 +1,22 @@
 #!/usr/bin/env bash
-# The main job, from a fresh Debian 12 / Ubuntu machine: set-up, build of every
-# preset, then the control library's golden-vector and cost report (accuracy
-# against the numpy double reference; instructions per control step on
-# emulated Cortex-M4F, M3, M0; code size). Once the HIL harness exists this
-# becomes the HIL demo of the paper's experiment.
+# The main job, from a fresh Debian 12 / Ubuntu machine: set-up, build of the host
+# firmware (pma-fw-host), then the paper's Case 3 in the HIL harness: the paper's
+# controller and MFAC, each on its own pma-fw-host node in lockstep over vcan
+# (through hil/with-vcan when the kernel has no SocketCAN), against identical
+# simulated rigs; prints the Table 2 comparison and writes figures.
+#
+#   bash tools/run-demo.sh            # full Case 3 (180 s of control time)
+#   bash tools/run-demo.sh --quick    # the first 30 s (CI)
+#   OUT=DIR bash tools/run-demo.sh    # results in DIR (default build/hil/case3)
+#
+# Any other arguments go to `python -m hil run` (e.g. --controller ppc-paper).
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$ROOT"
 bash tools/setup.sh
-bash tools/build-all.sh
-.venv/bin/python tools/report.py "$@"
+cmake --preset host-ubsan >/dev/null
+cmake --build --preset host-ubsan
+out=${OUT:-build/hil/case3}
+ctrls=(--controller ppc --controller mfac)
+for a in "$@"; do [[ $a == --controller ]] && ctrls=(); done
+exec .venv/bin/python -m hil run case3 --out "$out" "${ctrls[@]}" "$@"
