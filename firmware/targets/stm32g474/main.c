@@ -17,7 +17,7 @@ static void halt(void)
     (void)pma_hal_dac_write(0u);
     for (;;) {
         const uint64_t t_ms = pma_hal_time_us() / 1000u;
-        pma_hal_stm32g474_led_set((int)((t_ms / 50u) & 1u));
+        pma_hal_stm32g474_led_set((int)((t_ms / 25u) & 1u)); /* 20 Hz: unlike FAULT (10 Hz) */
     }
 }
 

@@ -1,12 +1,12 @@
 /* Base addresses of the registers (g4_io.h) and the NVIC helpers. */
-#include "g4_io.h"
+#include "g4_drivers.h" /* G4_NVM_BASE */
 
 g4_io_t g4_io = {
     .rcc = G4_RCC_BASE, .pwr = G4_PWR_BASE, .flash = G4_FLASH_BASE, .gpioa = G4_GPIOA_BASE,
     .gpiob = G4_GPIOB_BASE, .tim2 = G4_TIM2_BASE, .tim6 = G4_TIM6_BASE, .adc1 = G4_ADC1_BASE,
     .adc12_common = G4_ADC12_COMMON_BASE, .dac1 = G4_DAC1_BASE, .fdcan1 = G4_FDCAN1_BASE,
     .mram = G4_MRAM_BASE, .iwdg = G4_IWDG_BASE, .dbgmcu = G4_DBGMCU_BASE, .nvic = G4_NVIC_BASE,
-    .nvm = 0x0807E000u, /* G4_NVM_BASE (g4_drivers.h) */
+    .nvm = G4_NVM_BASE,
 };
 
 void g4_io_use_hardware(void)
@@ -16,7 +16,7 @@ void g4_io_use_hardware(void)
         .gpiob = G4_GPIOB_BASE, .tim2 = G4_TIM2_BASE, .tim6 = G4_TIM6_BASE, .adc1 = G4_ADC1_BASE,
         .adc12_common = G4_ADC12_COMMON_BASE, .dac1 = G4_DAC1_BASE, .fdcan1 = G4_FDCAN1_BASE,
         .mram = G4_MRAM_BASE, .iwdg = G4_IWDG_BASE, .dbgmcu = G4_DBGMCU_BASE,
-        .nvic = G4_NVIC_BASE, .nvm = 0x0807E000u,
+        .nvic = G4_NVIC_BASE, .nvm = G4_NVM_BASE,
     };
     g4_io = hw;
 }
