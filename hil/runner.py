@@ -183,7 +183,11 @@ class Runner:
         for i, (ctrl, node) in enumerate(zip(self.sc.controllers, nodes)):
             client = PmaNode(self.bus, node, self.proto, timeout_s=self.opts.reply_timeout_s)
             client.raw_listeners.append(self._log)
-            lane = Lane(i, ctrl, node, Rig(rp, seed=self.sc.seed), client, self.sc.node_params(ctrl))
+            params = self.sc.node_params(ctrl)
+            if self.opts.board:
+                # a board samples its ADC unless told to take the rig's samples (only while disarmed)
+                params = {"sys.plant_bridge": 1, **params}
+            lane = Lane(i, ctrl, node, Rig(rp, seed=self.sc.seed), client, params)
             self.lanes.append(lane)
             for name in msgs:
                 self._dispatch[self.proto.frame_id(name, node)] = (i, name)
@@ -237,6 +241,8 @@ class Runner:
                     lane.client.set(name, value)
                 except PmaError as e:
                     raise RunError(f"node {lane.node} ({lane.ctrl.label}): {e}") from e
+                except NoReply as e:
+                    raise RunError(f"node {lane.node} ({lane.ctrl.label}) does not answer PARAM_REQ: {e}") from e
             lane.params_read_back = lane.client.snapshot()  # type: ignore[attr-defined]
 
     # ------------------------------------------------------------- ticking --
@@ -390,7 +396,10 @@ class Runner:
             self._host_heartbeats()
             for _ in range(n_settle):
                 self._tick(rec, PHASE_IDLE, -1)
-            arm = self._command_all("ARM")
+            try:
+                arm = self._command_all("ARM")
+            except NoReply as e:
+                raise RunError(f"no reply to ARM: {e}") from e
             bad = {self.lanes[i].ctrl.label: r for i, r in arm.items() if r != "OK"}
             if bad:
                 raise RunError(f"ARM refused: {bad} (see the rig's idle position and safety.* in docs/hil.md)")
@@ -398,7 +407,10 @@ class Runner:
                 if k % hb_every == 0:
                     self._host_heartbeats()
                 self._tick(rec, PHASE_ARMED, -1)
-            start = self._command_all("START")
+            try:
+                start = self._command_all("START")
+            except NoReply as e:
+                raise RunError(f"no reply to START: {e}") from e
             for i, r in start.items():
                 self.lanes[i].start_result = r
             running = [lane for lane in self.lanes if lane.start_result == "OK"]
