@@ -38,6 +38,7 @@ from .reference import reference_function
 from .rig import Rig
 from .scenario import Controller, Scenario, protocol
 
+LOCKSTEP_WATCHDOG_MS = 10000  # pma-fw-host --watchdog-ms for HIL nodes (wall time; see _start_firmware)
 STOP_FILE = "STOP"  # created in the output directory: stop the run cleanly (Ctrl-C from outside the guest)
 PHASE_IDLE, PHASE_ARMED, PHASE_RUNNING = 0, 1, 2
 TELEM_FIELDS = {  # (message, signal) -> name in the recording
@@ -211,7 +212,12 @@ class Runner:
             store = fwdir / f"node{lane.node}.nvm"
             if store.exists():
                 store.unlink()      # every run starts from the defaults and sets what it needs
-            lane.fw = FirmwareProcess(fwdir, ["--node", str(lane.node), "--storage", str(store), "--lockstep"],
+            # The host port's watchdog counts wall time. In lockstep the control time is the
+            # harness's, and four nodes plus the harness on the vcan guest's single CPU can starve
+            # one node for over a second under load (a WATCHDOG_RESET in a CI run): 10 s still
+            # catches a hung process without resetting a merely slow one.
+            lane.fw = FirmwareProcess(fwdir, ["--node", str(lane.node), "--storage", str(store), "--lockstep",
+                                              "--watchdog-ms", str(LOCKSTEP_WATCHDOG_MS)],
                                       channel=channel).start()
         for lane in self.lanes:
             self._wait_heartbeat(lane, 10.0)
