@@ -201,6 +201,7 @@ def test_grouper_with_a_mask() -> None:
 def test_recorder_api(client, fake, tmp_path: Path) -> None:
     n = fake()
     n.set_state("ARMED")
+    client.wait_state("ARMED", timeout_s=5.0)     # a heartbeat sent before set_state may still be queued
     progress = []
     rec = TelemetryRecorder(client, tmp_path / "r.csv", tmp_path / "r.blf", tmp_path / "r.meta.json")
     s = rec.run(seconds=0.5, start=True, progress=progress.append, progress_every_s=0.1)
