@@ -90,7 +90,7 @@ def measure(cfg: dict[str, Any], seconds: float, work: Path) -> dict[str, Any]:
             state["seq"] = (state["seq"] + 1) & 0xFF
             exchange(bytes([state["seq"], 0x10, 0x08]), False)
 
-        def variant(use_rig: bool, log: bool) -> Callable[[int], None]:  # noqa: C901
+        def variant(use_rig: bool, log: bool) -> Callable[[int], None]:
             def step(_: int) -> None:
                 state["seq"] = (state["seq"] + 1) & 0xFF
                 counts = rig.sensor_counts() if use_rig else 2064

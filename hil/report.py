@@ -133,10 +133,8 @@ def write_figures(out: Path) -> list[Path]:
             lo, hi = -c["w1_cm"], c["w1_cm"]
     first = labels[0]
     ax[0].plot(data[f"{first}__t_s"], data[f"{first}__xr_cm"], "k--", lw=0.8, label="x_r")
-    band = (summary["controllers"][first].get("x_min_cm"), None)
-    ax[0].axhline(0.0, color="r", lw=0.6)
+    ax[0].axhline(0.0, color="r", lw=0.6)       # the paper's constraint band -3 < x < 0
     ax[0].axhline(-3.0, color="r", lw=0.6)
-    del band
     if lo is not None:
         ax[1].axhline(lo, color="r", lw=0.6, ls="--", label="+-w1")
         ax[1].axhline(hi, color="r", lw=0.6, ls="--")

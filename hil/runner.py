@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import sys
 import time
 from dataclasses import dataclass, field
@@ -74,6 +73,7 @@ class Lane:
     last_active: int = 0
     telem: dict[str, list[float]] = field(default_factory=dict)
     telem_row: dict[str, float] = field(default_factory=dict)
+    params_read_back: dict[str, float | int] = field(default_factory=dict)  # every parameter, after configuring
 
 
 @dataclass
@@ -249,7 +249,7 @@ class Runner:
                     raise RunError(f"node {lane.node} ({lane.ctrl.label}): {e}") from e
                 except NoReply as e:
                     raise RunError(f"node {lane.node} ({lane.ctrl.label}) does not answer PARAM_REQ: {e}") from e
-            lane.params_read_back = lane.client.snapshot()  # type: ignore[attr-defined]
+            lane.params_read_back = lane.client.snapshot()
 
     # ------------------------------------------------------------- ticking --
     def _tick(self, rec: Recorder, phase: int, run_step: int) -> None:
@@ -522,7 +522,7 @@ class Runner:
             summary["state"][label] = state
             summary["start_result"][label] = lane.start_result
             info: dict[str, Any] = {"mode": lane.ctrl.mode, "node": lane.node, "description": lane.ctrl.description,
-                                    "params_set": lane.params,
+                                    "params_set": lane.params, "params_read_back": lane.params_read_back,
                                     "final_dac_counts": dac, "final_output_active": active}
             if rec is None or rec.n == 0:
                 lanes_out[label] = info
@@ -618,15 +618,3 @@ def _jsonable(o: Any) -> Any:
     if isinstance(o, (np.integer,)):
         return int(o)
     return o
-
-
-def run_scenario(scenario: Scenario, opts: RunOptions,
-                 on_summary: Callable[[dict[str, Any]], None] | None = None) -> dict[str, Any]:
-    summary = Runner(scenario, opts).run()
-    if on_summary:
-        on_summary(summary)
-    return summary
-
-
-def inside_guest() -> bool:
-    return os.environ.get("PMA_HIL_INSIDE") == "1"

@@ -43,7 +43,7 @@ from __future__ import annotations
 
 import math
 import tomllib
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -112,7 +112,6 @@ class Scenario:
     expect: Expect
     settle_s: float = 0.5           # idle ticks before ARM (rig vented, samples flowing)
     armed_s: float = 1.0            # ARMED at the preset pressure before START
-    extra: dict[str, Any] = field(default_factory=dict)
 
     # ---------------------------------------------------------------- derived --
     def rig_params(self) -> RigParams:
