@@ -121,7 +121,6 @@ typedef enum phys {
 static struct {
     pma_app_t app;
     pma_app_platform_t plat;
-    uint8_t bridge;
     uint8_t node;
     uint8_t seq;               /* plant bridge: next PLANT_SENSOR Seq */
     uint8_t tx_faults;         /* drop/duplicate/blocked/bus errors were set in this input */
@@ -141,6 +140,16 @@ static struct {
 static uint8_t nvm_mem[2048u * 3u];
 
 /* ------------------------------------------------------------- helpers -- */
+
+/* The plant bridge is on when the platform forces it (input byte 0, bit 0) or
+ * when sys.plant_bridge is 1: a parameter a PARAM SET, LOAD or RESTORE_DEFAULTS
+ * may change, only while the output is inactive (check_param_req() checks
+ * that for every idle-access parameter). Frames, sensor samples and the
+ * output follow the parameter from the next tick on. */
+static bool bridge_on(void)
+{
+    return w.plat.plant_bridge != 0 || w.app.params.sys_plant_bridge != 0;
+}
 
 static bool is_active(uint8_t state)
 {
@@ -318,12 +327,12 @@ static void drain(void)
             CHECK((hb.state == PMA_STATE_FAULT) == (hb.fault_code != 0));
             CHECK(strcmp(pma_fault_name(hb.fault_code), "UNKNOWN") != 0);
             CHECK(((hb.flags & PMA_HB_OUTPUT_ACTIVE) != 0) == is_active(hb.state));
-            CHECK(((hb.flags & PMA_HB_PLANT_BRIDGE) != 0) == (w.bridge != 0));
+            CHECK(((hb.flags & PMA_HB_PLANT_BRIDGE) != 0) == bridge_on());
             ++w.tx.heartbeat;
             break;
         }
         case PMA_PROTO_PLANT_ACTUATOR_FRAME_ID: {
-            CHECK(w.bridge);
+            CHECK(bridge_on());
             struct pma_proto_plant_actuator_t a;
             CHECK(pma_proto_plant_actuator_unpack(&a, f.data, f.dlc) == 0);
             if (w.tx.act_kept < 8u) w.tx.act[w.tx.act_kept++] = a;
@@ -463,7 +472,7 @@ static void check_command(const snap_t *s, uint8_t cmd, uint8_t arg, int result)
             CHECK(a->x_cm >= p->safety_x_min_cm - p->safety_x_margin_cm &&
                   a->x_cm <= p->safety_x_max_cm + p->safety_x_margin_cm);
             CHECK(config_armable(p) && p->ctrl_u_min < p->ctrl_u_max);
-            if (w.bridge) CHECK(a->ticks_since_sample < p->safety_sensor_timeout_ticks);
+            if (bridge_on()) CHECK(a->ticks_since_sample < p->safety_sensor_timeout_ticks);
         }
         break;
     case PMA_CMD_DISARM:
@@ -712,7 +721,7 @@ static void do_tick(uint32_t late)
     const uint32_t writes = pma_fake_dac_write_count() - s.dac_writes;
     pma_fake_dac_write_t newest = {0, 0};
     const bool have_newest = pma_fake_dac_log(0, &newest) == PMA_OK;
-    if (w.bridge) {
+    if (bridge_on()) {
         CHECK(writes == 0);
         if (!w.tx_faults) CHECK(w.tx.actuator <= 1u);
     } else {
@@ -740,7 +749,7 @@ static void do_tick(uint32_t late)
         CHECK(a->x_cm >= p->safety_x_min_cm - p->safety_x_margin_cm &&
               a->x_cm <= p->safety_x_max_cm + p->safety_x_margin_cm);
         CHECK(late <= p->safety_max_late_ticks);
-        if (w.bridge) CHECK(a->ticks_since_sample < p->safety_sensor_timeout_ticks);
+        if (bridge_on()) CHECK(a->ticks_since_sample < p->safety_sensor_timeout_ticks);
         if (a->state == PMA_STATE_RUNNING) {
             if (p->safety_host_timeout_ms != 0) {
                 const uint64_t t = ((uint64_t)p->safety_host_timeout_ms * p->sys_tick_hz + 999u) / 1000u;
@@ -773,7 +782,7 @@ static void do_tick(uint32_t late)
         uint16_t c = 0;
         CHECK(oracle_counts(p, pk, &c));
         CHECK(a->dac_counts == c);
-        if (w.bridge) {
+        if (bridge_on()) {
             for (uint32_t i = 0; i < w.tx.act_kept; ++i) {
                 CHECK(w.tx.act[i].dac_counts == c && w.tx.act[i].output_active == 1u);
                 CHECK(w.tx.act[i].seq == a->bridge_seq);
@@ -790,7 +799,7 @@ static void do_tick(uint32_t late)
          * the command that was to be written is applied */
         const bool output_fault = s.state != PMA_STATE_FAULT && a->fault == PMA_FAULT_OUTPUT;
         if (output_fault && is_active(s.state)) {
-            CHECK(!w.bridge);
+            CHECK(!bridge_on());
             CHECK(near(a->p_kpa, oracle_safe_kpa(p, oracle_active_kpa(p, a->u, s.p_kpa, period_s))));
         } else {
             CHECK(a->p_kpa == oracle_safe_kpa(p, s.p_kpa));
@@ -804,7 +813,7 @@ static void do_tick(uint32_t late)
         } else {
             CHECK(a->dac_counts == 0u && a->state == PMA_STATE_FAULT);
         }
-        if (w.bridge) {
+        if (bridge_on()) {
             for (uint32_t i = 0; i < w.tx.act_kept; ++i) {
                 CHECK(w.tx.act[i].output_active == 0u);
                 CHECK(w.tx.act[i].dac_counts == a->dac_counts);
@@ -884,10 +893,9 @@ static void start_app(void)
 static void setup(uint8_t cfg)
 {
     memset(&w, 0, sizeof w);
-    w.bridge = (uint8_t)(cfg & 1u);
     const unsigned storage = (cfg >> 2) & 3u;
     w.plat = (pma_app_platform_t){
-        .plant_bridge = w.bridge,
+        .plant_bridge = (uint8_t)(cfg & 1u),
         .lockstep = (uint8_t)((cfg >> 1) & 1u),
         .node_id = NODE_MAP[(cfg >> 5) & 7u],
         .store_first_block = storage == 0 ? 0u : 1u,
@@ -927,7 +935,7 @@ static uint8_t raw_dlc(uint8_t c)
 
 static void send_sensor_counts(uint16_t raw)
 {
-    if (w.bridge) {
+    if (bridge_on()) {
         uint8_t d[8] = {0};
         d[0] = w.seq++;
         d[1] = (uint8_t)raw;
