@@ -21,6 +21,15 @@ from pmactl.protocol import Protocol
 Firmware = FirmwareProcess  # the name the tests use
 
 
+# pma-fw-host's software watchdog counts wall time (default 1 s). On a loaded machine
+# (the vcan guest has one CPU) a node can wait longer than that for the CPU, or for a
+# storage write to reach the disk; the watchdog then re-executes it (same pid) and it
+# comes back in FAULT WATCHDOG_RESET, with requests in flight (a SAVE) unanswered.
+# 10 s (as the HIL runner's nodes) still catches a hung process; a test of the watchdog
+# passes its own --watchdog-ms in extra (the last one counts).
+WATCHDOG_MS = 10000
+
+
 def pytest_configure(config: pytest.Config) -> None:
     if not Path(f"/sys/class/net/{CHANNEL}").exists():
         raise pytest.UsageError(
@@ -48,14 +57,15 @@ def bus() -> Iterator[can.BusABC]:
 def firmware(tmp_path: Path, bus: can.BusABC, proto: Protocol) -> Iterator:
     """Factory: start(node=0, lockstep=True, storage=True, extra=[]) -> (Firmware, PmaNode).
 
-    Waits for the node's first heartbeat. Every process started is stopped at
+    --watchdog-ms WATCHDOG_MS unless extra sets it. Waits for the node's first
+    heartbeat. Every process started is stopped at
     the end of the test and must exit cleanly (status 0, no sanitizer report),
     unless the test stopped it itself."""
     started: list[Firmware] = []
 
     def start(node: int = 0, lockstep: bool = True, storage: Path | bool = True,
               extra: list[str] | None = None, wait_heartbeat: bool = True) -> tuple[Firmware, PmaNode]:
-        args = ["--node", str(node)]
+        args = ["--node", str(node), "--watchdog-ms", str(WATCHDOG_MS)]
         if lockstep:
             args.append("--lockstep")
         if storage:

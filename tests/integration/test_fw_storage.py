@@ -115,10 +115,11 @@ def test_node_id_from_storage(firmware, bus, tmp_path) -> None:
     node.save()
     assert query_state(node) == STATE["IDLE"]          # still node NODE until a restart
     fw.stop()
-    from conftest import FW_HOST, CHANNEL
+    from conftest import CHANNEL, FW_HOST, WATCHDOG_MS
     drain(bus)
     log = (tmp_path / "noid.log").open("wb")
-    proc = subprocess.Popen([str(FW_HOST), "--can", CHANNEL, "--lockstep", "--storage", str(store)],
+    proc = subprocess.Popen([str(FW_HOST), "--can", CHANNEL, "--lockstep", "--storage", str(store),
+                             "--watchdog-ms", str(WATCHDOG_MS)],
                             stdout=log, stderr=subprocess.STDOUT)
     try:
         from pmactl.client import PmaNode
@@ -134,8 +135,9 @@ def test_node_id_from_storage(firmware, bus, tmp_path) -> None:
 
 # ---------------------------------------------------------------- power cut --
 
-def save_and_maybe_die(fw, node, timeout_s: float = 10.0) -> int | None:
-    """Sends SAVE; returns its Result, or None when the process exited first."""
+def save_and_maybe_die(fw, node, timeout_s: float = 60.0) -> int | None:
+    """Sends SAVE; returns its Result, or None when the process exited first.
+    timeout_s is only a guard against a hung process (a save is a few writes)."""
     node.send("PARAM_REQ", {"Op": 2, "Type": 0, "Id": 0, "Reserved": 0, "ValueF32": 0.0})
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
@@ -144,9 +146,12 @@ def save_and_maybe_die(fw, node, timeout_s: float = 10.0) -> int | None:
             name, nid, sig, _ = got
             if name == "PARAM_RESP" and nid == node.node and sig["Op"] == 2:
                 return sig["Result"]
+            if name == "HEARTBEAT" and nid == node.node and sig["State"] == STATE["BOOT"]:
+                # the watchdog re-executed it (same pid): the SAVE will never be answered
+                pytest.fail(f"pma-fw-host restarted during the SAVE:\n{fw.output()}")
         if fw.proc.poll() is not None:
             return None
-    pytest.fail("SAVE neither answered nor the process ended")
+    pytest.fail(f"SAVE neither answered nor the process ended within {timeout_s:g} s:\n{fw.output()}")
 
 
 def prepare(firmware, bus, path: Path, sets: list[dict]) -> None:

@@ -20,6 +20,14 @@ from plant import PlantRig
 from pmactl import PmaNode, load_protocol
 
 
+# pma-fw-host's software watchdog counts wall time (default 1 s). On a loaded machine
+# (the vcan guest has one CPU) a lockstep node can wait longer than that for the CPU;
+# the watchdog then re-executes it (same pid) and it comes back in FAULT WATCHDOG_RESET,
+# with requests in flight unanswered. 10 s (as the HIL runner's nodes) still catches
+# a hung process.
+WATCHDOG_MS = 10000
+
+
 def pytest_configure(config: pytest.Config) -> None:
     if not Path(f"/sys/class/net/{CHANNEL}").exists():
         raise pytest.UsageError(
@@ -46,15 +54,15 @@ def bus() -> Iterator[can.BusABC]:
 @pytest.fixture
 def firmware(tmp_path: Path, bus: can.BusABC) -> Iterator[Callable[..., PmaNode]]:
     """Factory: firmware(node=0, lockstep=True, storage=True) -> PmaNode (a client on the
-    test's own bus), after the node's BOOT heartbeat. Stopped at the end of the test;
-    each must exit with status 0 and no sanitizer report."""
+    test's own bus), after the node's BOOT heartbeat; --watchdog-ms WATCHDOG_MS. Stopped
+    at the end of the test; each must exit with status 0 and no sanitizer report."""
     started: list[Firmware] = []
     proto = load_protocol()
 
     def start(node: int = 0, lockstep: bool = True, storage: bool = True) -> PmaNode:
         while bus.recv(0) is not None:       # frames of an earlier process
             pass
-        args = ["--node", str(node)]
+        args = ["--node", str(node), "--watchdog-ms", str(WATCHDOG_MS)]
         if lockstep:
             args.append("--lockstep")
         if storage:

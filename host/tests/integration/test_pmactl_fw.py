@@ -7,17 +7,24 @@ from __future__ import annotations
 import csv
 import json
 import math
+import signal
 import subprocess
-import time
+import threading
 from pathlib import Path
 
 import can
 import pytest
 
-from fwhost import CHANNEL, PMACTL
+from fwhost import CHANNEL, PMACTL, REPLY_TIMEOUT_S
 from pmactl.protocol import load_protocol
 
 PROTO = load_protocol()
+TIMEOUT = f"{REPLY_TIMEOUT_S:g}"      # pmactl --timeout of the programs started here (fwhost.py)
+# pmactl scan listens this long (wall time) for heartbeats (every 100 ms of wall time): long
+# enough for a node that waits for the CPU now and then on a loaded machine
+SCAN_S = "2"
+# safety.host_timeout_ms in control ticks (sys.tick_hz 1000, lockstep: one tick per plant sample)
+HOST_TIMEOUT_TICKS = int(PROTO.param("safety.host_timeout_ms").default)
 
 
 def rows_of(out: str) -> dict[str, list[str]]:
@@ -27,7 +34,7 @@ def rows_of(out: str) -> dict[str, list[str]]:
 
 def test_scan_status_and_parameters(firmware, pmactl, tmp_path: Path) -> None:
     firmware(node=3)
-    r = pmactl("scan", "--seconds", "0.5")
+    r = pmactl("scan", "--seconds", SCAN_S)
     assert r.code == 0, r.err
     assert r.out.splitlines()[1].split() == ["3", "IDLE", "NONE", "PPC", "HOLD", "PLANT_BRIDGE", "LOCKSTEP",
                                              "PARAMS_DEFAULT"]
@@ -90,9 +97,9 @@ def test_scan_status_and_parameters(firmware, pmactl, tmp_path: Path) -> None:
 
 def test_errors_without_a_node(firmware, pmactl) -> None:
     firmware(node=0)
-    r = pmactl("status", node=9)
+    r = pmactl("status", node=9, reply_timeout_s=2)
     assert r.code == 4 and "no HEARTBEAT from node 9" in r.err
-    r = pmactl("params", "get", "ppc.c", node=9)
+    r = pmactl("params", "get", "ppc.c", node=9, reply_timeout_s=2)
     assert r.code == 4 and "no PARAM_RESP from node 9" in r.err
     r = pmactl("--channel", "vcan7", "status")
     assert r.code == 3 and "cannot open CAN interface socketcan vcan7" in r.err
@@ -102,7 +109,7 @@ def test_errors_without_a_node(firmware, pmactl) -> None:
 
 def test_state_commands(firmware, plant, pmactl, tmp_path: Path) -> None:
     firmware(node=0)
-    plant(node=0)
+    rig = plant(node=0)
     assert pmactl("controller", "pid").out.strip() == "node 0: controller PID (at the next START), state IDLE"
     assert pmactl("reference", "step").code == 0
     r = pmactl("controller")
@@ -123,24 +130,29 @@ def test_state_commands(firmware, plant, pmactl, tmp_path: Path) -> None:
     r = pmactl("start")
     assert r.code == 0 and r.out.startswith("node 0: START OK, state RUNNING")
     assert "HOST_HEARTBEAT_LOST" in r.out           # the note: nobody sends HOST_HEARTBEAT now ...
+    rig.wait_ticks(HOST_TIMEOUT_TICKS + 100)        # (control time: safety.host_timeout_ms at 1 kHz)
     r = pmactl("status")
     assert "fault        HOST_HEARTBEAT_LOST (10)" in r.out     # ... so the node faulted
     r = pmactl("stop")
     assert r.code == 1 and "refused STOP: FAULT (-23)" in r.err
     assert pmactl("clear-faults").code == 0
     assert pmactl("arm").code == 0
-    # with a host heartbeat from a monitor in the background the node keeps RUNNING
-    mon = subprocess.Popen([PMACTL, "--channel", CHANNEL, "monitor", "--host-heartbeat", "--seconds", "20"],
-                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    assert mon.stdout is not None
-    mon.stdout.readline()                            # "watching ...": the monitor is up
-    assert pmactl("start").code == 0
-    time.sleep(1.0)
-    assert "state        RUNNING" in pmactl("status").out
-    assert pmactl("stop").out.strip() == "node 0: STOP OK, state ARMED"
-    assert pmactl("disarm").out.strip() == "node 0: DISARM OK, state IDLE"
-    mon.kill()
-    mon.communicate()
+    # with a host heartbeat from a monitor in the background the node keeps RUNNING (the
+    # rig waits for the monitor's next heartbeat rather than outrun it: plant.py)
+    mon = subprocess.Popen([PMACTL, "--channel", CHANNEL, "--timeout", TIMEOUT, "monitor", "--host-heartbeat",
+                            "--seconds", "600"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert mon.stdout is not None
+        mon.stdout.readline()                        # "watching ...": the monitor is up
+        rig.wait_host_heartbeat()                    # ... and sending
+        assert pmactl("start").code == 0
+        rig.wait_ticks(3 * HOST_TIMEOUT_TICKS)
+        assert "state        RUNNING" in pmactl("status").out
+        assert pmactl("stop").out.strip() == "node 0: STOP OK, state ARMED"
+        assert pmactl("disarm").out.strip() == "node 0: DISARM OK, state IDLE"
+    finally:
+        mon.kill()
+        mon.communicate()
     r = pmactl("estop")
     assert r.code == 0 and r.out.strip() == "node 0: ESTOP sent, state FAULT (ESTOP)"
     r = pmactl("arm")
@@ -161,20 +173,42 @@ def test_estop_all(firmware, pmactl) -> None:
 
 def test_monitor(firmware, plant, pmactl) -> None:
     firmware(node=0)
-    mon = subprocess.Popen([PMACTL, "--channel", CHANNEL, "monitor", "--seconds", "12"],
-                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    assert mon.stdout is not None
-    first = mon.stdout.readline()                    # "watching ...": the monitor is up
-    plant(node=0)
-    assert pmactl("arm").code == 0
-    assert pmactl("estop").code == 0
-    out, err = mon.communicate(timeout=30)
-    out = first + out
+    # until Ctrl-C (SIGINT), once it has shown the ESTOP; --seconds and the timer only guard
+    # against a hang. (env: SIGINT may be ignored here, e.g. in hil/with-vcan's guest, and
+    # a program started with SIGINT ignored keeps ignoring it.)
+    mon = subprocess.Popen(["env", "--default-signal=INT", PMACTL, "--channel", CHANNEL, "monitor",
+                            "--seconds", "600"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    guard = threading.Timer(300, mon.kill)
+    guard.start()
+    try:
+        assert mon.stdout is not None
+        lines = [mon.stdout.readline()]              # "watching ...": the monitor is up
+        plant(node=0)
+        assert pmactl("arm").code == 0
+        assert pmactl("estop").code == 0             # (it waits for the FAULT heartbeat)
+        for line in mon.stdout:                      # the monitor sees that heartbeat too
+            lines.append(line)
+            if "state ARMED -> FAULT" in line:
+                break
+        mon.send_signal(signal.SIGINT)
+        rest, err = mon.communicate(timeout=60)
+    finally:
+        guard.cancel()
+        if mon.poll() is None:
+            mon.kill()
+            mon.communicate()
+    out = "".join(lines) + rest
     assert mon.returncode == 0, err
     assert "node 0   IDLE, controller PPC, reference HOLD" in out
     assert "state IDLE -> ARMED" in out
     assert "FAULT ESTOP (1)" in out and "state ARMED -> FAULT" in out
     assert out.splitlines()[-1] == "1 node(s) seen: 0 FAULT (ESTOP)"
+
+
+# pmactl record stops after --samples rows (control time); its --seconds (wall time) and the
+# subprocess timeout are only hang guards, far beyond what a loaded machine needs
+RECORD_GUARD = ("--seconds", "300")
+RECORD_TIMEOUT_S = 400.0
 
 
 def read_csv(path: Path) -> tuple[list[str], list[list[float]]]:
@@ -189,14 +223,17 @@ def test_record_and_plot(firmware, plant, pmactl, tmp_path: Path) -> None:
     assert pmactl("arm").code == 0
     rig.wait_ticks(300)
     out = tmp_path / "run.csv"
-    r = pmactl("record", str(out), "--start", "--seconds", "4", timeout_s=60)
+    # 400 rows: 4 s of control time (telem.decimation 10 at 1 kHz); --seconds only bounds the
+    # wall time (the lockstep plant runs as fast as the machine lets it)
+    r = pmactl("record", str(out), "--start", *RECORD_GUARD, "--samples", "400", timeout_s=RECORD_TIMEOUT_S)
     assert r.code == 0, r.err
     assert "recording" in r.err                               # the progress display
+    assert "recorded 400 rows" in r.out and "400 samples recorded" in r.out
     assert "incomplete rows 0, lost rows 0" in r.out
     header, rows = read_csv(out)
     assert header[:6] == ["t [s]", "x [cm]", "xr [cm]", "e [cm]", "u [input unit]", "v [cm/s]"]
     assert header[6:8] == ["lambda1 [cm]", "lambda2 [cm/s]"]
-    assert len(rows) >= 50
+    assert len(rows) == 400
     t = [row[0] for row in rows]
     steps = {round(b - a, 3) for a, b in zip(t, t[1:])}
     assert steps == {0.01}                                    # telem.decimation 10 at 1 kHz, none lost
@@ -211,7 +248,7 @@ def test_record_and_plot(firmware, plant, pmactl, tmp_path: Path) -> None:
                                            "COMMAND", "COMMAND_ACK")} <= ids
     meta = json.loads((tmp_path / "run.meta.json").read_text())
     assert meta["controller"] == "PPC" and meta["params"]["ppc.t_u_s"] == 2.0
-    assert "node 0: ARMED" in pmactl("scan", "--seconds", "0.3").out.replace("   0  ARMED", "node 0: ARMED")
+    assert "node 0: ARMED" in pmactl("scan", "--seconds", SCAN_S).out.replace("   0  ARMED", "node 0: ARMED")
     r = pmactl("plot", str(out))
     assert r.code == 0, r.err
     pngs = [Path(line) for line in r.out.splitlines() if line.endswith(".png")]
@@ -229,20 +266,32 @@ def test_setpoint_stream(firmware, plant, pmactl, tmp_path: Path) -> None:
     assert pmactl("arm").code == 0
     rig.wait_ticks(200)
     out = tmp_path / "stream.csv"
-    rec = subprocess.Popen([PMACTL, "--channel", CHANNEL, "record", str(out), "--start", "--seconds", "8",
-                            "-q"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    deadline = time.monotonic() + 30
-    while (not out.exists() or out.read_text().count("\n") < 20) and time.monotonic() < deadline:
-        time.sleep(0.2)                              # RUNNING, recording
-    r = pmactl("setpoint", "-5")
-    assert r.code == 2 and "outside the constraint band (-3, 0) cm" in r.err
-    r = pmactl("setpoint", "-1.2")
-    assert (r.code, r.out.strip()) == (0, "node 0: set-point -1.2 cm sent"), r.err
-    stdout, stderr = rec.communicate(timeout=60)
+    rec = subprocess.Popen([PMACTL, "--channel", CHANNEL, "--timeout", TIMEOUT, "record", str(out), "--start",
+                            *RECORD_GUARD, "--samples", "300", "-q"],
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        rig.wait_state("RUNNING")                    # recording
+        rig.wait_ticks(100)                          # 10 rows at the initial value
+        rig.pause()                                  # control time stands still: RUNNING, recording
+        try:
+            r = pmactl("setpoint", "-5")
+            assert r.code == 2 and "outside the constraint band (-3, 0) cm" in r.err
+            r = pmactl("setpoint", "-1.2")
+            assert (r.code, r.out.strip()) == (0, "node 0: set-point -1.2 cm sent"), r.err
+        finally:
+            rig.resume()
+        _, stderr = rec.communicate(timeout=RECORD_TIMEOUT_S)
+    finally:
+        if rec.poll() is None:
+            rec.kill()
+            rec.communicate()
     assert rec.returncode == 0, stderr
     _, rows = read_csv(out)
+    assert len(rows) == 300
     xr = [row[2] for row in rows]
-    assert xr[0] == pytest.approx(-1.5) and xr[-1] == pytest.approx(-1.2)
+    # the jump (ref.rate_cm_s 0) while paused: the initial value, then the set-point
+    jump = next(i for i, v in enumerate(xr) if v != pytest.approx(-1.5))
+    assert jump >= 10 and all(v == pytest.approx(-1.2) for v in xr[jump:]), xr
 
 
 def test_bring_up_recipes(firmware, plant, pmactl, tmp_path: Path) -> None:
@@ -253,15 +302,20 @@ def test_bring_up_recipes(firmware, plant, pmactl, tmp_path: Path) -> None:
     assert pmactl("controller", "off").code == 0
     assert pmactl("arm").code == 0
     rig.wait_ticks(200)
-    r = pmactl("record", "check.csv", "--start", "--seconds", "2", "-q", cwd=tmp_path)
+    # docs/tuning.md records for --seconds 2 and 3 at a rig in real time; in lockstep the same
+    # control time is --samples 200 and 300 (telem.decimation 10 at 1 kHz)
+    r = pmactl("record", "check.csv", "--start", *RECORD_GUARD, "--samples", "200", "-q", cwd=tmp_path,
+               timeout_s=RECORD_TIMEOUT_S)
     assert r.code == 0, r.err
     _, rows = read_csv(tmp_path / "check.csv")
-    assert rows and all(abs(row[1]) < 0.1 for row in rows)   # near the equilibrium at p0: x = 0
+    assert len(rows) == 200 and all(abs(row[1]) < 0.1 for row in rows)   # near the equilibrium at p0: x = 0
     assert all(row[4] == 0.0 for row in rows)                 # OFF: u = 0
     assert pmactl("params", "set", "ctrl.openloop_u", "3").code == 0      # plant: x -> +0.3 cm
     assert pmactl("controller", "open_loop").code == 0
-    r = pmactl("record", "ol.csv", "--start", "--seconds", "3", "-q", cwd=tmp_path)
+    r = pmactl("record", "ol.csv", "--start", *RECORD_GUARD, "--samples", "300", "-q", cwd=tmp_path,
+               timeout_s=RECORD_TIMEOUT_S)
     assert r.code == 0, r.err
     _, rows = read_csv(tmp_path / "ol.csv")
+    assert len(rows) == 300
     assert rows[0][4] == 3.0 and rows[-1][1] > rows[0][1] + 0.1     # x rises
     assert pmactl("disarm").code == 0

@@ -10,8 +10,17 @@ trade-offs on what it records:
 - on this plant the law sits at its velocity barrier (the holding input), and the
   steady-state feedforward (ppc.ff_gain_per_s) removes most barrier clamps.
 
+Each trial records a fixed stretch of control time, 800 rows (8 s at telem.decimation 10 and
+1 kHz): in lockstep the plant runs as fast as the machine lets it, so a recording of so many
+seconds of wall time would hold more or less control time from run to run, and the metrics
+compared would cover different windows. --seconds only bounds the wall time. Each trial also
+starts alike (from rest, ARMED for 300 ticks, the same sensor noise: see trial()), so a run
+prints the same metrics on any machine.
+
 With PMACTL_SESSION_OUT=FILE it writes the transcript (every command and its output) to
-FILE, and the figures next to it; docs/tuning.md quotes such a transcript.
+FILE, and the figures next to it; docs/tuning.md quotes such a transcript. The commands run
+with --timeout 10 (fwhost.REPLY_TIMEOUT_S: on a loaded machine the node may answer late),
+which the transcript leaves out.
 
     PMACTL_SESSION_OUT=/tmp/session.md hil/with-vcan .venv/bin/python -m pytest \\
         host/tests/integration -k tuning_session
@@ -33,7 +42,7 @@ class Transcript:
         self.lines: list[str] = []
 
     def __call__(self, *args: str, expect: int = 0) -> Run:
-        r = pmactl_run(*args, node=None, cwd=self.cwd, timeout_s=120)
+        r = pmactl_run(*args, node=None, cwd=self.cwd, timeout_s=WALL_GUARD_S + 100)   # (and --timeout)
         self.lines.append("$ pmactl " + " ".join(args))
         self.lines += (r.err + r.out).rstrip("\n").splitlines()   # progress (stderr) comes first
         assert r.code == expect, (args, r.out, r.err)
@@ -43,9 +52,17 @@ class Transcript:
         return "\n".join(self.lines) + "\n"
 
 
+ROWS = 800            # rows per trial: 8 s of control time
+ARMED_TICKS = 300     # control ticks ARMED before START
+WALL_GUARD_S = 300    # pmactl record --seconds: a hang guard only
+
+
 def numbers(plot_out: str) -> dict[str, float]:
     """The metrics pmactl plot prints."""
     got: dict[str, float] = {}
+    m = re.search(r"(\d+) rows, t ([\d.]+)\.\.([\d.]+) s", plot_out)
+    assert m, plot_out
+    got["rows"], got["t_end"] = float(m[1]), float(m[3])
     m = re.search(r"\|e\| < w1 = \S+ cm from t = ([\d.]+) s on", plot_out)
     if m:
         got["entry"] = float(m[1])
@@ -72,11 +89,19 @@ def test_tuning_session(firmware, plant, tmp_path: Path) -> None:
     run("params", "set", "ppc.w1_cm", "0.3")
 
     def trial(name: str, quiet: bool = True, armed: Callable[[], None] | None = None) -> dict[str, float]:
+        # Every trial starts alike, whatever the machine's speed: from rest (IDLE: the rig holds
+        # x at x_rest), ARMED for exactly ARMED_TICKS, START, with the same sensor noise. The rig
+        # stands still meanwhile (no control time passes while pmactl starts).
+        rig.wait_ticks(2)                   # a tick with the output inactive: at rest
+        rig.pause()
+        rig.reseed()
         run("arm")
-        rig.wait_ticks(300)
+        rig.run_ticks(ARMED_TICKS)
         if armed:
             armed()
-        run("record", f"{name}.csv", "--start", "--seconds", "8", *(["-q"] if quiet else []))
+        rig.resume_on("RUNNING")            # at the START the recorder sends
+        run("record", f"{name}.csv", "--start", "--samples", str(ROWS), "--seconds", str(WALL_GUARD_S),
+            *(["-q"] if quiet else []))
         out = run("plot", f"{name}.csv", "--no-panels").out
         run("disarm")
         return numbers(out)
@@ -105,6 +130,9 @@ def test_tuning_session(firmware, plant, tmp_path: Path) -> None:
             shutil.copy(f, target.parent / f.name)
 
     runs = f"case2b {case2b}, tu05 {fast}, ff2 {ff}"
+    # the same control time in every trial: ROWS rows, none lost (t 0.009 .. 7.999 s)
+    for m in (case2b, fast, ff):
+        assert m["rows"] == ROWS and abs(m["t_end"] - ROWS / 100) < 0.02, runs
     # the paper's guarantee, on every run: inside w1 by t_u, and after it
     for m, t_u in ((case2b, 2.0), (fast, 0.5), (ff, 2.0)):
         assert m["entry"] <= t_u and m["max_e"] < 0.3, runs
