@@ -369,7 +369,7 @@ static void test_dac_init_and_write(void **state)
 {
     (void)state;
     assert_int_equal(g4_dac_init(), PMA_OK);
-    assert_int_equal(REG(r_dac1, G4_DAC1_MCR_OFFSET), 2u << 14); /* HFSEL > 160 MHz, MODE1 0: buffered pin */
+    assert_int_equal(REG(r_dac1, G4_DAC1_MCR_OFFSET), (2u << 14) | 2u); /* HFSEL > 160 MHz, MODE1 010: pin, no buffer */
     assert_true(REG(r_dac1, G4_DAC1_CR_OFFSET) & 1u);            /* EN1 */
     assert_int_equal(REG(r_dac1, G4_DAC1_DHR12R1_OFFSET), 0u);   /* starts at 0 V */
     assert_int_equal((r_gpioa[0] >> 8) & 3u, 3u);                /* PA4 analog */

@@ -5,7 +5,11 @@
  * 42.5 MHz (HCLK / 4), 16x hardware oversampling shifted right by 4: a mean
  * of 16 conversions as a 12-bit number every 39.5 us, overwriting the
  * previous (OVRMOD), so a read takes the newest without waiting.
- * DAC: PA4 (DAC1_OUT1), output buffer on, 12 bits right-aligned, 0..4095. */
+ * DAC: PA4 (DAC1_OUT1), 12 bits right-aligned, 0..4095, output buffer OFF: the
+ * buffer cannot go below about 0.2 V (nor above VDDA - 0.2 V), which the x3
+ * stage would turn into a pressure at "0 kPa"; unbuffered the pin reaches 0 V.
+ * Its source impedance (about 15 kOhm) needs a high-impedance load: the
+ * op-amp's non-inverting input (docs/hardware.md). */
 #include "g4_drivers.h"
 
 #define ADC_VREG_STARTUP_CYCLES (20u * 170u) /* t_ADCVREG_STUP 20 us at 170 MHz */
@@ -89,7 +93,7 @@ int g4_dac_init(void)
      * the buffer on, to the pin */
     g4_rmw(g4_io.dac1, G4_DAC1_CR_OFFSET, G4_DAC1_CR_EN1_Msk, 0u);
     g4_wr(g4_io.dac1, G4_DAC1_MCR_OFFSET,
-          G4_FIELD(G4_DAC_HFSEL_ABOVE_160MHZ, G4_DAC1_MCR_HFSEL) | G4_FIELD(0u, G4_DAC1_MCR_MODE1));
+          G4_FIELD(G4_DAC_HFSEL_ABOVE_160MHZ, G4_DAC1_MCR_HFSEL) | G4_FIELD(G4_DAC_MODE_PIN_UNBUFFERED, G4_DAC1_MCR_MODE1));
     g4_wr(g4_io.dac1, G4_DAC1_DHR12R1_OFFSET, 0u); /* 0 V: the regulator's minimum pressure */
     g4_rmw(g4_io.dac1, G4_DAC1_CR_OFFSET, 0u, G4_DAC1_CR_EN1_Msk);
     if (g4_wait(g4_io.dac1, G4_DAC1_SR_OFFSET, G4_DAC1_SR_DAC1RDY_Msk, G4_DAC1_SR_DAC1RDY_Msk,

@@ -369,11 +369,12 @@
 #define G4_DAC1_SR_DAC1RDY_Pos 11u
 #define G4_DAC1_SR_DAC1RDY_Msk (0x1u << G4_DAC1_SR_DAC1RDY_Pos)
 #define G4_DAC1_MCR_OFFSET 0x3Cu
-#define G4_DAC1_MCR_MODE1_Pos 0u       /* 000: normal mode, buffer on, to the pin */
+#define G4_DAC1_MCR_MODE1_Pos 0u       /* 000: normal, buffer on; 010: normal, buffer off, to the pin */
 #define G4_DAC1_MCR_MODE1_Msk (0x7u << G4_DAC1_MCR_MODE1_Pos)
 #define G4_DAC1_MCR_HFSEL_Pos 14u      /* 10: AHB clock above 160 MHz */
 #define G4_DAC1_MCR_HFSEL_Msk (0x3u << G4_DAC1_MCR_HFSEL_Pos)
 #define G4_DAC_HFSEL_ABOVE_160MHZ 2u
+#define G4_DAC_MODE_PIN_UNBUFFERED 2u  /* MODE1 010: normal mode, external pin, buffer off (RM0440 DAC_MCR) */
 #define G4_DAC_MAX_COUNTS 4095u        /* 12-bit, right-aligned */
 
 /* ---------------------------------------------------- FDCAN (RM0440 44.4) -- */
