@@ -179,7 +179,8 @@ def main(argv: list[str] | None = None) -> int:
     can_opts(r)
     r.add_argument("--board", action="store_true",
                    help="drive an external node (a board) in real time instead of starting pma-fw-host")
-    r.add_argument("--node", type=int, default=1, help="--board: the board's node id (default 1)")
+    r.add_argument("--node", type=int, default=0,
+                   help="--board: the board's node id (default 0, a fresh board's sys.node_id)")
     r.add_argument("--log-format", choices=("blf", "asc"), default="blf", help="bus log format (default blf)")
     r.add_argument("--no-progress", action="store_true", help="no progress bar")
     r.add_argument("--no-figures", action="store_true", help="do not write PNG figures")

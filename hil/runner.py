@@ -8,8 +8,13 @@ sends PLANT_SENSOR (the rig's sensor counts, sequence number), waits for the
 node's PLANT_ACTUATOR of that sequence number, applies its DAC counts to the rig
 and advances the rig by one control period. With pma-fw-host in lockstep mode
 the PLANT_SENSOR frame is the node's tick, so simulated time is exact however
-slow the bus is. Against a board (real time, --board) the runner paces itself at
-the board's tick rate instead.
+slow the bus is. Against a board (real time, --board) the board ticks on its own
+timer and answers every tick, so its answers pace the runner: the next sample
+goes out as soon as the last one's answer is in, well before the board's next
+tick while the runner keeps up. A tick for which the sample still came late uses
+the previous sample again (its PLANT_ACTUATOR says REPEATED). The rig lives through such ticks too (one control
+period each, under that tick's command) and the run's time axis counts them, so
+the rig's time stays the board's and late samples cost accuracy, not time.
 
 Configuration goes over CAN exactly as a user's would, through the pmactl
 client: parameters by name (SET), ARM, START, STOP, DISARM. Everything on the
@@ -40,6 +45,8 @@ from .scenario import Controller, Scenario, protocol
 LOCKSTEP_WATCHDOG_MS = 10000  # pma-fw-host --watchdog-ms for HIL nodes (wall time; see _start_firmware)
 STOP_FILE = "STOP"  # created in the output directory: stop the run cleanly (Ctrl-C from outside the guest)
 PHASE_IDLE, PHASE_ARMED, PHASE_RUNNING = 0, 1, 2
+BOARD_HEARTBEAT_WAIT_S = 10.0   # --board: how long to wait for the board's first heartbeat
+SAMPLE_REPEATED = 1     # PLANT_ACTUATOR.Sample: the tick used the previous sample again (DBC)
 TELEM_FIELDS = {  # (message, signal) -> name in the recording
     ("TELEM_A", "TimeMs"): "time_ms", ("TELEM_A", "XCm"): "x_cm",
     ("TELEM_B", "XrCm"): "xr_cm", ("TELEM_B", "ECm"): "e_cm",
@@ -71,6 +78,8 @@ class Lane:
     start_result: str = ""
     last_dac: int = 0
     last_active: int = 0
+    repeated_dac: list[int] = field(default_factory=list)   # --board: commands of ticks without a new sample
+    repeated_ticks: int = 0                                   # --board: how many, over the run
     telem: dict[str, list[float]] = field(default_factory=dict)
     telem_row: dict[str, float] = field(default_factory=dict)
     params_read_back: dict[str, float | int] = field(default_factory=dict)  # every parameter, after configuring
@@ -82,7 +91,7 @@ class RunOptions:
     quick: bool = False
     bus_config: dict[str, Any] = field(default_factory=lambda: {"interface": "socketcan", "channel": "vcan0"})
     board: bool = False             # drive an external node in real time (no pma-fw-host, no lockstep)
-    board_node: int = 1
+    board_node: int = 0              # a fresh board's sys.node_id
     log_format: str = "blf"         # python-can log of the bus: blf or asc
     progress: bool = True
     reply_timeout_s: float = 2.0
@@ -204,6 +213,13 @@ class Runner:
 
     def _start_firmware(self) -> None:
         if self.opts.board:
+            # the board is already up: its heartbeat says it is on this bus with this node id
+            for lane in self.lanes:
+                try:
+                    self._wait_heartbeat(lane, BOARD_HEARTBEAT_WAIT_S)
+                except RunError as e:
+                    raise RunError(f"{e}: is the board powered, on this bus at the right bit rate, "
+                                   f"and is its sys.node_id {lane.node} (--node)?") from e
             return
         fwdir = self.out / "firmware"
         fwdir.mkdir(exist_ok=True)
@@ -252,9 +268,13 @@ class Runner:
             lane.params_read_back = lane.client.snapshot()
 
     # ------------------------------------------------------------- ticking --
-    def _tick(self, rec: Recorder, phase: int, run_step: int) -> None:
-        """One control tick of every lane: sensor out, actuator in, rig step."""
+    def _tick(self, rec: Recorder, phase: int, run_step: int) -> int:
+        """One control tick of every lane: sensor out, actuator in, rig step. Returns how
+        many board ticks passed before this sample's (--board; 0 in lockstep): the sample's
+        run step is run_step plus those."""
         assert self.bus is not None
+        if self.opts.board:
+            self._collect_repeats()
         sensor_def = self.proto.messages["PLANT_SENSOR"]
         for lane in self.lanes:
             lane.seq = (lane.seq + 1) & 0xFF
@@ -267,6 +287,7 @@ class Runner:
             r = rec.data[lane.index]
             r["counts"][rec.n] = counts
         pending = {lane.index for lane in self.lanes}
+        prev_seq = {lane.index: (lane.seq - 1) & 0xFF for lane in self.lanes}
         deadline = time.monotonic() + self.opts.reply_timeout_s
         act_def = self.proto.messages["PLANT_ACTUATOR"]
         while pending:
@@ -291,6 +312,9 @@ class Runner:
                 if len(msg.data) != 4:
                     continue
                 sig = act_def.decode(bytes(msg.data), decode_choices=False, scaling=False)
+                if self.opts.board and sig["Seq"] == prev_seq[i] and sig["Sample"] == SAMPLE_REPEATED:
+                    lane.repeated_dac.append(int(sig["DacCounts"]))   # a board tick before this sample's
+                    continue
                 if sig["Seq"] != lane.seq or i not in pending:
                     continue
                 pending.discard(i)
@@ -302,13 +326,20 @@ class Runner:
             else:
                 self._other_frame(lane, name, msg)
         t_rig = time.perf_counter()
+        extra = 0
         for lane in self.lanes:
             rig = lane.rig
-            rig.apply_dac(lane.last_dac)
             r = rec.data[lane.index]
             k = rec.n
+            extra = max(extra, len(lane.repeated_dac))
             r["phase"][k] = phase
-            r["run_step"][k] = run_step
+            r["run_step"][k] = run_step + len(lane.repeated_dac) if run_step >= 0 else run_step
+            for dac in lane.repeated_dac:           # --board: ticks the rig lived through meanwhile
+                rig.apply_dac(dac)
+                rig.step(self.period_s)
+            lane.repeated_ticks += len(lane.repeated_dac)
+            lane.repeated_dac.clear()
+            rig.apply_dac(lane.last_dac)
             r["x_true_cm"][k] = rig.x_cm
             r["v_true_cm_s"][k] = rig.v_cm_s
             r["p_kpa"][k] = rig.p_kpa
@@ -319,6 +350,29 @@ class Runner:
         self.t_rig_s += time.perf_counter() - t_rig
         rec.n += 1
         self.tick += 1
+        return extra
+
+    def _collect_repeats(self) -> None:
+        """--board, before a sample goes out: the board's PLANT_ACTUATOR frames received
+        since the last sample's reply. Those of ticks that used the last sample again
+        (REPEATED) are ticks the rig must live through before this sample."""
+        assert self.bus is not None
+        act_def = self.proto.messages["PLANT_ACTUATOR"]
+        while (msg := self.bus.recv(0)) is not None:
+            self._log(msg)
+            found = self._dispatch.get(msg.arbitration_id)
+            if found is None or msg.is_error_frame or msg.is_remote_frame:
+                continue
+            i, name = found
+            lane = self.lanes[i]
+            if name != "PLANT_ACTUATOR":
+                self._other_frame(lane, name, msg)
+                continue
+            if len(msg.data) != 4:
+                continue
+            sig = act_def.decode(bytes(msg.data), decode_choices=False, scaling=False)
+            if sig["Seq"] == lane.seq and sig["Sample"] == SAMPLE_REPEATED:
+                lane.repeated_dac.append(int(sig["DacCounts"]))
 
     def _other_frame(self, lane: Lane, name: str, msg: can.Message) -> None:
         try:
@@ -375,15 +429,6 @@ class Runner:
     def _stop_requested(self) -> bool:
         return (self.out / STOP_FILE).exists()
 
-    def _pace(self, t_next: float) -> None:
-        """Real-time mode (a board): wait for the next tick's wall-clock time."""
-        while True:
-            left = t_next - time.monotonic()
-            if left <= 0:
-                return
-            if left > 0.002:
-                time.sleep(left - 0.001)
-
     # ----------------------------------------------------------------- run --
     def run(self) -> dict[str, Any]:
         t_wall0 = time.monotonic()
@@ -425,27 +470,28 @@ class Runner:
                                 self.opts.progress)
             t_loop0 = time.monotonic()
             self.t_recv_s = self.t_rig_s = 0.0
-            t_next = t_loop0
             steps_done = 0
             if running:
-                for n in range(n_run):
+                n = 0                   # control ticks since START (a board's may outrun the samples)
+                next_hb = 0
+                next_progress = 0
+                while n < n_run:
                     t = n * self.period_s
                     while events and events[0].t_s <= t + 1e-12:
                         ev = events.pop(0)
                         self._apply_event(ev.action, ev.value)
-                    if n % hb_every == 0:
+                    if n >= next_hb:
+                        next_hb = n + hb_every
                         self._host_heartbeats()
                         if self._stop_requested():
                             self.interrupted = True
                             break
-                    if self.opts.board:
-                        t_next += self.period_s
-                        self._pace(t_next)
-                    self._tick(rec, PHASE_RUNNING, n)
+                    n += 1 + self._tick(rec, PHASE_RUNNING, n)
                     steps_done += 1
-                    if n % 250 == 0:
-                        progress.update(n)
-                progress.update(steps_done if self.interrupted else n_run)
+                    if n >= next_progress:
+                        next_progress = n + 250
+                        progress.update(min(n, n_run))
+                progress.update(min(n, n_run))
             loop_s = time.monotonic() - t_loop0
             self.bench = {"run_ticks": steps_done, "lanes": len(self.lanes), "loop_wall_s": loop_s,
                           "ticks_per_s": steps_done / loop_s if loop_s > 0 else math.nan,
@@ -545,7 +591,9 @@ class Runner:
             arrays[f"{label}__t_s"] = t
             arrays[f"{label}__xr_cm"] = xr
             arrays[f"{label}__e_cm"] = e
-            info["reference_check_max_abs_cm"] = self._reference_check(telem, t, xr, x_meas[run])
+            info["reference_check_max_abs_cm"] = self._reference_check(telem, d["run_step"][run], xr_fn, x_meas[run])
+            if self.opts.board:
+                info["board_repeated_ticks"] = lane.repeated_ticks
             if len(t) == 0:
                 lanes_out[label] = info
                 continue
@@ -575,22 +623,27 @@ class Runner:
         (self.out / "summary.json").write_text(json.dumps(_jsonable(summary), indent=2) + "\n")
         return summary
 
-    def _reference_check(self, telem: dict[str, np.ndarray], t: np.ndarray, xr: np.ndarray,
-                         x_meas: np.ndarray) -> float | None:
+    def _reference_check(self, telem: dict[str, np.ndarray], steps: np.ndarray,
+                         xr_fn: Callable[[np.ndarray], np.ndarray], x_meas: np.ndarray) -> float | None:
         """max |x_r(harness) - x_r(firmware, TELEM_B)| over the telemetry samples, and a
         RunError-worthy note when the firmware's x (TELEM_A) is not the harness's
-        measured x at the same tick (the time bases disagree)."""
-        if "t_s" not in telem or not len(telem["t_s"]) or not len(t):
+        measured x at the same tick (the time bases disagree). steps: the run step of each
+        recorded sample (0, 1, 2, ... in lockstep; a board's ticks without a new sample
+        are skipped, and they used the sample before)."""
+        if "t_s" not in telem or not len(telem["t_s"]) or not len(steps):
             return None
-        idx = np.round(telem["t_s"] / self.period_s).astype(np.int64)
-        ok = (idx >= 0) & (idx < len(t))
+        tick = np.round(telem["t_s"] / self.period_s).astype(np.int64)
+        idx = np.searchsorted(steps, tick, side="right") - 1     # the sample that tick used
+        ok = (idx >= 0) & (tick <= steps[-1])
         if not ok.any():
             return None
-        dx = np.abs(telem["x_cm"][ok] - x_meas[idx[ok]])
+        idx = idx[ok]
+        dx = np.abs(telem["x_cm"][ok] - x_meas[idx])
         if float(np.max(dx)) > 1e-4:
             self.errors.append(f"telemetry x differs from the harness's measured x by {float(np.max(dx)):.3g} cm: "
                                "the time bases disagree")
-        return float(np.max(np.abs(telem["xr_cm"][ok] - xr[idx[ok]])))
+        # x_r at the telemetry's own tick (on a repeated tick, later than the sample's)
+        return float(np.max(np.abs(telem["xr_cm"][ok] - xr_fn(tick[ok] * self.period_s))))
 
 
 def static_pressure_for(sc: Scenario) -> Callable[[np.ndarray], np.ndarray]:
