@@ -289,7 +289,6 @@ class Runner:
         pending = {lane.index for lane in self.lanes}
         prev_seq = {lane.index: (lane.seq - 1) & 0xFF for lane in self.lanes}
         deadline = time.monotonic() + self.opts.reply_timeout_s
-        act_def = self.proto.messages["PLANT_ACTUATOR"]
         while pending:
             left = deadline - time.monotonic()
             if left <= 0:
@@ -300,31 +299,22 @@ class Runner:
             t_wait = time.perf_counter()
             msg = self.bus.recv(left)
             self.t_recv_s += time.perf_counter() - t_wait
-            if msg is None:
+            got = self._receive(msg) if msg is not None else None
+            if got is None:
                 continue
-            self._log(msg)
-            found = self._dispatch.get(msg.arbitration_id)
-            if found is None or msg.is_error_frame or msg.is_remote_frame:
+            lane, sig = got
+            i = lane.index
+            if self.opts.board and sig["Seq"] == prev_seq[i] and sig["Sample"] == SAMPLE_REPEATED:
+                lane.repeated_dac.append(int(sig["DacCounts"]))   # a board tick before this sample's
                 continue
-            i, name = found
-            lane = self.lanes[i]
-            if name == "PLANT_ACTUATOR":
-                if len(msg.data) != 4:
-                    continue
-                sig = act_def.decode(bytes(msg.data), decode_choices=False, scaling=False)
-                if self.opts.board and sig["Seq"] == prev_seq[i] and sig["Sample"] == SAMPLE_REPEATED:
-                    lane.repeated_dac.append(int(sig["DacCounts"]))   # a board tick before this sample's
-                    continue
-                if sig["Seq"] != lane.seq or i not in pending:
-                    continue
-                pending.discard(i)
-                lane.last_dac, lane.last_active = int(sig["DacCounts"]), int(sig["OutputActive"])
-                r = rec.data[i]
-                r["dac_counts"][rec.n] = lane.last_dac
-                r["output_active"][rec.n] = lane.last_active
-                r["sample_status"][rec.n] = int(sig["Sample"])
-            else:
-                self._other_frame(lane, name, msg)
+            if sig["Seq"] != lane.seq or i not in pending:
+                continue
+            pending.discard(i)
+            lane.last_dac, lane.last_active = int(sig["DacCounts"]), int(sig["OutputActive"])
+            r = rec.data[i]
+            r["dac_counts"][rec.n] = lane.last_dac
+            r["output_active"][rec.n] = lane.last_active
+            r["sample_status"][rec.n] = int(sig["Sample"])
         t_rig = time.perf_counter()
         extra = 0
         for lane in self.lanes:
@@ -357,22 +347,27 @@ class Runner:
         since the last sample's reply. Those of ticks that used the last sample again
         (REPEATED) are ticks the rig must live through before this sample."""
         assert self.bus is not None
-        act_def = self.proto.messages["PLANT_ACTUATOR"]
         while (msg := self.bus.recv(0)) is not None:
-            self._log(msg)
-            found = self._dispatch.get(msg.arbitration_id)
-            if found is None or msg.is_error_frame or msg.is_remote_frame:
-                continue
-            i, name = found
-            lane = self.lanes[i]
-            if name != "PLANT_ACTUATOR":
-                self._other_frame(lane, name, msg)
-                continue
-            if len(msg.data) != 4:
-                continue
-            sig = act_def.decode(bytes(msg.data), decode_choices=False, scaling=False)
-            if sig["Seq"] == lane.seq and sig["Sample"] == SAMPLE_REPEATED:
-                lane.repeated_dac.append(int(sig["DacCounts"]))
+            got = self._receive(msg)
+            if got is not None and got[1]["Seq"] == got[0].seq and got[1]["Sample"] == SAMPLE_REPEATED:
+                got[0].repeated_dac.append(int(got[1]["DacCounts"]))
+
+    def _receive(self, msg: can.Message) -> tuple[Lane, dict[str, Any]] | None:
+        """A frame from the bus: logged; a node's PLANT_ACTUATOR is returned with its lane
+        (raw signals); its other frames (heartbeat, telemetry, ...) are noted."""
+        self._log(msg)
+        found = self._dispatch.get(msg.arbitration_id)
+        if found is None or msg.is_error_frame or msg.is_remote_frame:
+            return None
+        i, name = found
+        lane = self.lanes[i]
+        if name != "PLANT_ACTUATOR":
+            self._other_frame(lane, name, msg)
+            return None
+        if len(msg.data) != 4:
+            return None
+        return lane, self.proto.messages["PLANT_ACTUATOR"].decode(bytes(msg.data), decode_choices=False,
+                                                                   scaling=False)
 
     def _other_frame(self, lane: Lane, name: str, msg: can.Message) -> None:
         try:
