@@ -80,6 +80,20 @@ def firmware_defaults() -> dict[str, float]:
     return {p["name"]: p["default"] for p in data["param"]}
 
 
+def check_firmware_values(values: dict[str, Any]) -> None:
+    """SystemExit for a name the firmware does not have or a value outside its range
+    (params.toml): a result the firmware would refuse to run is no result."""
+    with open(PARAMS_TOML, "rb") as f:
+        table = {p["name"]: p for p in tomllib.load(f)["param"]}
+    for name, v in values.items():
+        p = table.get(name)
+        if p is None:
+            raise SystemExit(f"ppc_rig_sweep: {name}: no such firmware parameter (firmware/app/params.toml)")
+        if isinstance(v, (int, float)) and not p["min"] <= v <= p["max"]:
+            raise SystemExit(f"ppc_rig_sweep: {name} = {v:g} is outside {p['min']:g}..{p['max']:g} "
+                             f"{p.get('unit', '')}: the firmware would refuse it")
+
+
 # ------------------------------------------------------------------------------------ cases --
 @dataclass
 class Case:
@@ -508,6 +522,7 @@ def main(argv: list[str] | None = None) -> int:
             else:
                 fo[k] = v
             label.append(f"{k}={v}")
+        check_firmware_values(fo)
         cfgs.append(build_config(args.case, fo, ro, duration, args.dist, args.seed, args.arm_s,
                                  " ".join(label)))
     if args.trace and len(cfgs) == 1:

@@ -72,19 +72,9 @@ def test_paper_controller_has_no_barrier_breach_after_tu(runs, case):
     assert c["barrier_breaches_after_tu"] == 0
 
 
-@pytest.mark.parametrize("case", ["case1", "case2a", "case2b"])
+@pytest.mark.parametrize("case", ["case1", "case2a", "case2b", "case3"])
 def test_paper_controller_does_not_chatter(runs, case):
     c = runs(case)[0]["controllers"]["ppc"]
-    assert c["chatter_ratio"] is not None and c["chatter_ratio"] < CHATTER_MAX, c["chatter_ratio"]
-
-
-# Not met (issue 4 stays open; docs/hil.md "What is not met"): Case 3's reference needs only
-# 6.8 kPa/s of pressure motion in its first 30 s (43.5 kPa/s over the run), less than what the
-# sensor's noise moves any feedback loop's command (MFAC's moves 30x the need in those 30 s). strict: the
-# day this passes, the marker must go.
-@pytest.mark.xfail(strict=True, reason="Case 3: the command's noise floor exceeds 3x the need (docs/hil.md)")
-def test_paper_controller_does_not_chatter_case3(runs):
-    c = runs("case3")[0]["controllers"]["ppc"]
     assert c["chatter_ratio"] is not None and c["chatter_ratio"] < CHATTER_MAX, c["chatter_ratio"]
 
 
@@ -102,14 +92,22 @@ def test_the_paper_law_exactly_is_reported(runs, case):
 
 
 def test_case3_paper_controller_beats_mfac_once_the_chirp_speeds_up(runs):
-    """Windows 60-180 s. In the first two windows (5-60 s) both errors are at the sensor's
-    noise floor (~0.002 cm) and MFAC is as good or better: reported, not asserted
-    (docs/hil.md, "What is not met")."""
+    """Windows 60-180 s, by a wide margin (at least 2x)."""
     s, _ = runs("case3")
     ppc, mfac = s["rmste"]["ppc"], s["rmste"]["mfac"]
     assert len(ppc) == 6
     for w, a, b in list(zip(s["windows"], ppc, mfac))[2:]:
-        assert a < b, f"window {w}: PPC {a:.4f} cm vs MFAC {b:.4f} cm"
+        assert 2.0 * a < b, f"window {w}: PPC {a:.4f} cm vs MFAC {b:.4f} cm"
+
+
+# Not met (issue 4 stays open; docs/hil.md "What is not met"): in 5-30 s and 30-60 s both
+# controllers are at the sensor's quantisation floor (measured RMSTE about 0.0014 cm with a
+# perfect loop) and MFAC is 1-3 % lower. strict: the day this passes, the marker must go.
+@pytest.mark.xfail(strict=True, reason="Case 3, 5-60 s: both at the sensor's floor, MFAC 1-3 % lower (docs/hil.md)")
+def test_case3_paper_controller_beats_mfac_in_every_window(runs):
+    s, _ = runs("case3")
+    for w, a, b in zip(s["windows"], s["rmste"]["ppc"], s["rmste"]["mfac"]):
+        assert a < b, f"window {w}: PPC {a:.6f} cm vs MFAC {b:.6f} cm"
 
 
 def test_case3_mfac_error_grows_as_the_chirp_speeds_up(runs):
