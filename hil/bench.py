@@ -28,6 +28,7 @@ from typing import Any, Callable
 import can
 
 from .fw_process import FW_HOST, BUILD_HINT, FirmwareProcess
+from .runner import LOCKSTEP_WATCHDOG_MS, REPLY_TIMEOUT_S
 from .rig import Rig
 from .rig_params import RigParams
 from .scenario import parse, protocol
@@ -57,7 +58,8 @@ def measure(cfg: dict[str, Any], seconds: float, work: Path) -> dict[str, Any]:
     act_id = proto.frame_id("PLANT_ACTUATOR", NODE)
     sensor_def, act_def = proto.messages["PLANT_SENSOR"], proto.messages["PLANT_ACTUATOR"]
     rig = Rig(RigParams.from_dict({"p0_kpa": 300.0, "substep_s": 2.5e-4}), seed=1)
-    fw = FirmwareProcess(work, ["--node", str(NODE), "--storage", str(work / "bench.nvm"), "--lockstep"],
+    fw = FirmwareProcess(work, ["--node", str(NODE), "--storage", str(work / "bench.nvm"), "--lockstep",
+                                "--watchdog-ms", str(LOCKSTEP_WATCHDOG_MS)],
                          channel=str(cfg.get("channel", "vcan0"))).start()
     bus = can.Bus(**cfg)
     bus.set_filters([{"can_id": act_id, "can_mask": 0x7FF, "extended": False}])
@@ -78,9 +80,9 @@ def measure(cfg: dict[str, Any], seconds: float, work: Path) -> dict[str, Any]:
             if log:
                 logger.on_message_received(msg)
             while True:
-                r = bus.recv(2.0)
+                r = bus.recv(REPLY_TIMEOUT_S)
                 if r is None:
-                    raise RuntimeError(f"no PLANT_ACTUATOR within 2 s:\n{fw.output()[-2000:]}")
+                    raise RuntimeError(f"no PLANT_ACTUATOR within {REPLY_TIMEOUT_S:g} s:\n{fw.output()[-2000:]}")
                 if log:
                     logger.on_message_received(r)
                 if r.arbitration_id == act_id and r.data[0] == data[0]:

@@ -42,6 +42,7 @@ from .reference import reference_function
 from .rig import Rig
 from .scenario import Controller, Scenario, protocol
 
+REPLY_TIMEOUT_S = 10.0
 LOCKSTEP_WATCHDOG_MS = 10000  # pma-fw-host --watchdog-ms for HIL nodes (wall time; see _start_firmware)
 STOP_FILE = "STOP"  # created in the output directory: stop the run cleanly (Ctrl-C from outside the guest)
 PHASE_IDLE, PHASE_ARMED, PHASE_RUNNING = 0, 1, 2
@@ -94,7 +95,10 @@ class RunOptions:
     board_node: int = 0              # a fresh board's sys.node_id
     log_format: str = "blf"         # python-can log of the bus: blf or asc
     progress: bool = True
-    reply_timeout_s: float = 2.0
+    # how long a node may take to answer (a sample, a parameter, a command) before the run
+    # fails: in lockstep a node answers at once, but the vcan guest's one CPU, on a busy
+    # host, can hold it back for seconds; a dead node is found at once (_check_alive)
+    reply_timeout_s: float = REPLY_TIMEOUT_S
 
 
 class Recorder:
