@@ -12,9 +12,10 @@ slow the bus is. Against a board (real time, --board) the board ticks on its own
 timer and answers every tick, so its answers pace the runner: the next sample
 goes out as soon as the last one's answer is in, well before the board's next
 tick while the runner keeps up. A tick for which the sample still came late uses
-the previous sample again (its PLANT_ACTUATOR says REPEATED). The rig lives through such ticks too (one control
-period each, under that tick's command) and the run's time axis counts them, so
-the rig's time stays the board's and late samples cost accuracy, not time.
+the previous sample again (its PLANT_ACTUATOR says REPEATED). The rig lives
+through such ticks too (one control period each, under that tick's command) and
+the run's time axis counts them, so the rig's time stays the board's and late
+samples cost accuracy, not time.
 
 Configuration goes over CAN exactly as a user's would, through the pmactl
 client: parameters by name (SET), ARM, START, STOP, DISARM. Everything on the
@@ -353,8 +354,11 @@ class Runner:
         assert self.bus is not None
         while (msg := self.bus.recv(0)) is not None:
             got = self._receive(msg)
-            if got is not None and got[1]["Seq"] == got[0].seq and got[1]["Sample"] == SAMPLE_REPEATED:
-                got[0].repeated_dac.append(int(got[1]["DacCounts"]))
+            if got is None:
+                continue
+            lane, sig = got
+            if sig["Seq"] == lane.seq and sig["Sample"] == SAMPLE_REPEATED:
+                lane.repeated_dac.append(int(sig["DacCounts"]))
 
     def _receive(self, msg: can.Message) -> tuple[Lane, dict[str, Any]] | None:
         """A frame from the bus: logged; a node's PLANT_ACTUATOR is returned with its lane
