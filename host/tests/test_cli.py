@@ -560,19 +560,33 @@ def test_plot_bad_file_is_exit_5(pmactl, tmp_path: Path) -> None:
 
 
 # ----------------------------------------------------------------------- monitor --
-def test_monitor(pmactl, fake) -> None:
+def wait_monitor_sees(bus: can.BusABC, nodes: tuple[int, ...]) -> None:
+    """Returns once a `pmactl monitor --host-heartbeat` is up (its HOST_HEARTBEAT to node 0 is
+    on the bus) and has had a heartbeat of every node since: tests act on that, never on a
+    timer (a loaded machine may take longer than any sleep to start the monitor)."""
+    for wanted in (PROTO.frame_id("HOST_HEARTBEAT", 0), *(PROTO.frame_id("HEARTBEAT", n) for n in nodes)):
+        while (m := bus.recv(10.0)) is not None and m.arbitration_id != wanted:
+            pass
+
+
+def test_monitor(pmactl, fake, channel) -> None:
     import threading
     a = fake(node=0)
     b = fake(node=2)
+    bus = can.Bus(interface="virtual", channel=channel)
 
     def later() -> None:
-        time.sleep(0.3)
+        wait_monitor_sees(bus, (0, 2))
         a.set_state("FAULT", "SENSOR_WIRE_BREAK")
-        time.sleep(0.2)
+        wait_monitor_sees(bus, (0,))
         b.heartbeats = False
 
-    threading.Thread(target=later, daemon=True).start()
-    r = pmactl("monitor", "--seconds", "1.5", "--silent-after", "0.4")
+    t = threading.Thread(target=later, daemon=True)
+    t.start()
+    # --seconds (wall time): room for node 2's silence (--silent-after) to be noticed
+    r = pmactl("monitor", "--seconds", "3", "--silent-after", "0.4", "--host-heartbeat")
+    t.join()
+    bus.shutdown()
     assert r.code == EXIT_OK
     lines = r.out.splitlines()
     assert lines[0].startswith("watching virtual")
@@ -600,16 +614,20 @@ def test_monitor_reports_estop_and_refusals(pmactl, fake, channel) -> None:
     import threading
     fake()
 
+    bus = can.Bus(interface="virtual", channel=channel)
+
     def later() -> None:
-        time.sleep(0.2)
-        bus = can.Bus(interface="virtual", channel=channel)
+        wait_monitor_sees(bus, (0,))                          # ... in state IDLE
         bus.send(can.Message(arbitration_id=PROTO.frame_id("COMMAND", 0), data=b"\x04\x00",
                              is_extended_id=False))        # STOP while IDLE: refused
         bus.send(can.Message(arbitration_id=0, data=b"", is_extended_id=False))
-        bus.shutdown()
 
-    threading.Thread(target=later, daemon=True).start()
-    r = pmactl("monitor", "--seconds", "0.6")
+    t = threading.Thread(target=later, daemon=True)
+    t.start()
+    # --seconds: long enough for the node's answers to come after the frames (wall time)
+    r = pmactl("monitor", "--seconds", "3", "--host-heartbeat")
+    t.join()
+    bus.shutdown()
     assert "refused STOP: STATE (-20)" in r.out
     assert "bus      ESTOP_ALL on the bus" in r.out
     assert "FAULT ESTOP (1)" in r.out
