@@ -63,8 +63,8 @@ def test_paper_controller_meets_its_guarantees(runs, case):
 
 @pytest.mark.parametrize("case", ["case1", "case2a", "case2b", "case3"])
 def test_paper_controller_has_no_barrier_breach_after_tu(runs, case):
-    """With the scenario's set (w2 = 2 cm/s, c = 32, tracking observer at 5 Hz, feedforward;
-    docs/hil.md) lambda2 never meets its barrier after t_u, and the supervisor's BARRIER fault
+    """With the scenario's set (docs/hil.md: Cases 1 and 2 w2 = 2 cm/s and c = 32, Case 3 its
+    own) lambda2 never meets its barrier after t_u, and the supervisor's BARRIER fault
     (safety.barrier_ticks, left at its default) is on for this node."""
     s, _ = runs(case)
     c = s["controllers"]["ppc"]
