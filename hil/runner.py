@@ -321,12 +321,12 @@ class Runner:
             r["output_active"][rec.n] = lane.last_active
             r["sample_status"][rec.n] = int(sig["Sample"])
         t_rig = time.perf_counter()
-        extra = 0
+        skipped_ticks = 0   # --board: the most board ticks any lane had before this sample's
         for lane in self.lanes:
             rig = lane.rig
             r = rec.data[lane.index]
             k = rec.n
-            extra = max(extra, len(lane.repeated_dac))
+            skipped_ticks = max(skipped_ticks, len(lane.repeated_dac))
             r["phase"][k] = phase
             r["run_step"][k] = run_step + len(lane.repeated_dac) if run_step >= 0 else run_step
             for dac in lane.repeated_dac:           # --board: ticks the rig lived through meanwhile
@@ -345,7 +345,7 @@ class Runner:
         self.t_rig_s += time.perf_counter() - t_rig
         rec.n += 1
         self.tick += 1
-        return extra
+        return skipped_ticks
 
     def _collect_repeats(self) -> None:
         """--board, before a sample goes out: the board's PLANT_ACTUATOR frames received

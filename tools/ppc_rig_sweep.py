@@ -80,11 +80,15 @@ def firmware_defaults() -> dict[str, float]:
     return {p["name"]: p["default"] for p in data["param"]}
 
 
-def check_firmware_values(values: dict[str, Any]) -> None:
+def firmware_table() -> dict[str, dict[str, Any]]:
+    """name -> the parameter's entry in firmware/app/params.toml (range, unit, default)."""
+    with open(PARAMS_TOML, "rb") as f:
+        return {p["name"]: p for p in tomllib.load(f)["param"]}
+
+
+def check_firmware_values(values: dict[str, Any], table: dict[str, dict[str, Any]]) -> None:
     """SystemExit for a name the firmware does not have or a value outside its range
     (params.toml): a result the firmware would refuse to run is no result."""
-    with open(PARAMS_TOML, "rb") as f:
-        table = {p["name"]: p for p in tomllib.load(f)["param"]}
     for name, v in values.items():
         p = table.get(name)
         if p is None:
@@ -513,6 +517,7 @@ def main(argv: list[str] | None = None) -> int:
         k, vals = g.split("=", 1)
         grid.append((k.strip(), [parse_value(v) for v in vals.split(",")]))
     cfgs = []
+    table = firmware_table()
     for combo in itertools.product(*[vals for _, vals in grid]) if grid else [()]:
         fo, ro = dict(fw_over), dict(rig_over)
         label = []
@@ -522,7 +527,7 @@ def main(argv: list[str] | None = None) -> int:
             else:
                 fo[k] = v
             label.append(f"{k}={v}")
-        check_firmware_values(fo)
+        check_firmware_values(fo, table)
         cfgs.append(build_config(args.case, fo, ro, duration, args.dist, args.seed, args.arm_s,
                                  " ".join(label)))
     if args.trace and len(cfgs) == 1:
