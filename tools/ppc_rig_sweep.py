@@ -73,17 +73,15 @@ PARAMS_TOML = REPO / "firmware" / "app" / "params.toml"
 MODE_PPC, MODE_MFAC, MODE_PID = 1, 2, 3
 
 
-def firmware_defaults() -> dict[str, float]:
-    """name -> default of every parameter in firmware/app/params.toml."""
-    with open(PARAMS_TOML, "rb") as f:
-        data = tomllib.load(f)
-    return {p["name"]: p["default"] for p in data["param"]}
-
-
 def firmware_table() -> dict[str, dict[str, Any]]:
     """name -> the parameter's entry in firmware/app/params.toml (range, unit, default)."""
     with open(PARAMS_TOML, "rb") as f:
         return {p["name"]: p for p in tomllib.load(f)["param"]}
+
+
+def firmware_defaults() -> dict[str, float]:
+    """name -> default of every parameter in firmware/app/params.toml."""
+    return {name: p["default"] for name, p in firmware_table().items()}
 
 
 def check_firmware_values(values: dict[str, Any], table: dict[str, dict[str, Any]]) -> None:
@@ -189,11 +187,12 @@ def build_config(case_name: str, fw_over: dict[str, Any], rig_over: dict[str, An
                  duration_s: float | None = None, dist_n: float | None = None,
                  seed: int = 1, arm_s: float = 1.0, label: str = "") -> RunConfig:
     case = CASES[case_name]
-    fw = firmware_defaults()
+    defaults = firmware_defaults()
+    fw = dict(defaults)
     fw.update(COMMON_FW)
     fw.update(case.fw)
     fw.update(fw_over)
-    unknown = set(fw) - set(firmware_defaults())
+    unknown = set(fw) - set(defaults)
     if unknown:
         raise SystemExit(f"unknown firmware parameter(s) {sorted(unknown)}")
     # ctrl.u_min/u_max consistent with the actuator limits unless given explicitly
