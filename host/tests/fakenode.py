@@ -13,7 +13,7 @@ import math
 import threading
 import time
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Callable
 
 import can
 
@@ -38,6 +38,18 @@ OUTPUT_ACTIVE, PLANT_BRIDGE, PARAMS_CHANGED, PARAMS_DEFAULT, SENSOR_VALID, REF_A
     0x01, 0x02, 0x08, 0x10, 0x40, 0x80
 
 
+def wait_until(cond: Callable[[], bool], timeout_s: float = 10.0) -> bool:
+    """Polls cond until it holds or timeout_s passes; its last value. The fake node's
+    thread handles frames when the machine lets it, so a test waits for an effect
+    rather than sleeping a fixed time."""
+    deadline = time.monotonic() + timeout_s
+    while not cond():
+        if time.monotonic() > deadline:
+            return cond()
+        time.sleep(0.005)
+    return True
+
+
 @dataclass
 class Row:
     param: Param | None
@@ -59,6 +71,7 @@ class FakeNode:
     sensor: bool = True              # ARM needs a sensor sample (else NOT_READY)
     answer: bool = True              # False: heartbeats only, no replies
     heartbeats: bool = True
+    wire_break_at_tick: int | None = None   # RUNNING: fault SENSOR_WIRE_BREAK after this many ticks
     overrides: dict[str, dict[str, Any]] = field(default_factory=dict)  # name -> {"max": ...}
     params: tuple[str, ...] = DEFAULT_PARAMS
 
@@ -83,6 +96,12 @@ class FakeNode:
         self.last_host_hb = time.monotonic()
         self.run_t0 = 0.0
         self.telem_ticks = 0
+        # The host-heartbeat timeout counts telemetry ticks (as the firmware counts control
+        # ticks), not wall time, so a slow test machine does not make it expire early.
+        # After set_state("RUNNING") it starts with the first frame from the host (the test
+        # stands for "a host started this node a moment ago"); after START, at once.
+        self.ticks_since_host_hb = 0
+        self.host_timer_armed = False
         self.lock = threading.Lock()
         self.bus = can.Bus(interface="virtual", channel=self.channel)
         self._stop = threading.Event()
@@ -109,6 +128,8 @@ class FakeNode:
                 self.run_t0 = time.monotonic()
                 self.last_host_hb = time.monotonic()
                 self.telem_ticks = 0
+                self.ticks_since_host_hb = 0
+                self.host_timer_armed = False
 
     def value(self, name: str) -> float | int:
         return self.rows[PROTO.param(name).id].value
@@ -179,12 +200,17 @@ class FakeNode:
                 if self.heartbeats and now >= next_hb:
                     self._heartbeat()
                     next_hb = now + self.heartbeat_s
-                if self.state == STATE["RUNNING"]:
+                if self.state == STATE["RUNNING"] and now >= next_telem:
                     timeout_ms = int(self.value("safety.host_timeout_ms"))
-                    if timeout_ms and now - self.last_host_hb > timeout_ms / 1000.0:
+                    if (timeout_ms and self.host_timer_armed
+                            and self.ticks_since_host_hb * self.telem_s * 1000.0 >= timeout_ms):
                         self.state, self.fault = STATE["FAULT"], FAULT["HOST_HEARTBEAT_LOST"]
-                    elif now >= next_telem:
+                    elif self.wire_break_at_tick is not None and self.telem_ticks >= self.wire_break_at_tick:
+                        self.state, self.fault = STATE["FAULT"], FAULT["SENSOR_WIRE_BREAK"]
+                    else:
                         self._telemetry()
+                        if self.host_timer_armed:
+                            self.ticks_since_host_hb += 1
                         next_telem = now + self.telem_s
 
     # ------------------------------------------------------------- frames --
@@ -204,9 +230,11 @@ class FakeNode:
         except Exception:
             return
         self.received.append((name, sig))
+        self.host_timer_armed = True
         if name == "HOST_HEARTBEAT":
             self.host_heartbeats += 1
             self.last_host_hb = time.monotonic()
+            self.ticks_since_host_hb = 0
         elif name == "SETPOINT":
             self.setpoints.append(float(sig["XrCm"]))
         elif name == "COMMAND" and self.answer:
@@ -252,6 +280,7 @@ class FakeNode:
             self.run_t0 = time.monotonic()
             self.last_host_hb = time.monotonic()
             self.telem_ticks = 0
+            self.ticks_since_host_hb = 0
             return ok
         if cmd == CMD["STOP"]:
             if s == STATE["IDLE"]:

@@ -12,7 +12,7 @@ from pathlib import Path
 import can
 import pytest
 
-from fakenode import PROTO, UNKNOWN_ID
+from fakenode import PROTO, UNKNOWN_ID, wait_until
 from pmactl import (NoReply, PmaNode, SetRejected, TelemetryGrouper, TelemetryRecorder, bus_config,
                     load_protocol, paramfile)
 from pmactl.client import DEFAULT_CHANNEL, InterfaceError, internal_labels
@@ -137,16 +137,25 @@ def test_load_values_skips_unchanged(client, fake) -> None:
 
 def test_keep_alive_sends_host_heartbeats_while_waiting(client, fake) -> None:
     n = fake()
+    hb_id = PROTO.frame_id("HOST_HEARTBEAT", 0)
+    sent: list[float] = []
+    client.raw_listeners.append(
+        lambda m: sent.append(time.monotonic()) if m.arbitration_id == hb_id and not m.is_rx else None)
     client.host_heartbeat_s = 0.05
-    t0 = time.monotonic()
-    while time.monotonic() - t0 < 0.5:
-        client.receive(0.2)
-    assert 6 <= n.host_heartbeats <= 13
+    deadline = time.monotonic() + 30.0
+    while len(sent) < 6 and time.monotonic() < deadline:
+        client.receive(0.2)                  # returns early when a heartbeat is due
+    assert len(sent) == 6
+    assert wait_until(lambda: n.host_heartbeats == 6), n.host_heartbeats
     client.host_heartbeat_s = None
-    before = n.host_heartbeats
     client.receive(0.2)
-    time.sleep(0.02)
-    assert n.host_heartbeats == before
+    assert len(sent) == 6
+    # rate-limited: with a long period, many receives send one heartbeat (the first is due now)
+    client._next_host_heartbeat = 0.0
+    client.host_heartbeat_s = 1000.0
+    for _ in range(5):
+        client.receive(0.02)
+    assert len(sent) == 7
 
 
 def test_listeners_see_frames_a_request_consumes(client, fake) -> None:

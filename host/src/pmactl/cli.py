@@ -581,10 +581,10 @@ def cmd_record(s: Session) -> int:
     b = str(summary.breaches) if summary.breaches is not None else "-"
     s.out(f"  max |e| {e}, breaches {b}, incomplete rows {summary.incomplete}, "
           f"lost rows {summary.lost}")
-    if summary.rows == 0:
-        raise NoReply(f"no telemetry from node {node.node}")
     if summary.stop_reason.startswith(f"node {node.node} left RUNNING"):
         return EXIT_REFUSED
+    if summary.rows == 0:
+        raise NoReply(f"no telemetry from node {node.node}")
     return EXIT_OK
 
 
