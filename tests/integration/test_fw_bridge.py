@@ -125,11 +125,12 @@ def test_real_time_arm_needs_a_fresh_sample(firmware, bus) -> None:
     is not sending); with a fresh one ARM succeeds."""
     fw, node = start(firmware, bus, node=NODE, lockstep=False)
     node.set("sys.tick_hz", 100)
-    node.set("safety.sensor_timeout_ticks", 20)
+    # 100 ticks = 1 s: the fresh sample below stays fresh until ARM even on a slow guest
+    node.set("safety.sensor_timeout_ticks", 100)
     node.set("safety.max_late_ticks", 1000)
     node.exchange_sample(1, COUNTS_MID, timeout_s=5)
     node.wait_for("PLANT_ACTUATOR", lambda s: s["Sample"] == SAMPLE["REPEATED"], timeout_s=5)
-    for _ in range(21):                                   # the node's own ticks: the sample ages
+    for _ in range(101):                                  # the node's own ticks: the sample ages
         node.wait_for("PLANT_ACTUATOR", timeout_s=5)
     assert not fresh_heartbeat(node)["Flags"] & HB_SENSOR_VALID
     ack = node.command("ARM", check=False)
