@@ -85,6 +85,11 @@ def _clamp(x: float, lo: float, hi: float) -> float:
     return lo if x < lo else hi if x > hi else x
 
 
+def _f32(x: float) -> float:
+    """x rounded to the nearest float32 (as a Python float)."""
+    return float(np.float32(x))
+
+
 def _finite(*values: float) -> bool:
     return all(math.isfinite(v) for v in values)
 
@@ -315,18 +320,27 @@ class MfacOutput:
 
 
 class Mfac:
-    """CFDL-MFAC. Start: y(-1) = y(0), u(-1) = u(-2) = u_init, phi(0) = phi1."""
+    """CFDL-MFAC. Start: y(-1) = y(0), u(-1) = u(-2) = u_init, phi(0) = phi1.
 
-    def __init__(self, cfg: MfacConfig) -> None:
+    float32=True rounds every operation to single precision in the order
+    pma_mfac_step_f32 evaluates it (for closed-loop predictions of the float firmware;
+    the golden vectors use the default double precision). In closed loop the two differ
+    more than rounding suggests: near a steady state an increment of u below half an
+    ulp of u (6e-5 kPa at u = 530 kPa) is lost in float, du is then exactly 0 and the
+    reset rule (|du| <= eps) sets phi back to phi1, where double keeps adapting phi."""
+
+    def __init__(self, cfg: MfacConfig, float32: bool = False) -> None:
         cfg.validate()
         self.cfg = cfg
+        self.float32 = float32
         self.reset()
 
     def reset(self) -> None:
         """Back to the start conditions."""
-        self.phi = self.cfg.phi1
-        self.u1 = self.cfg.u_init
-        self.u2 = self.cfg.u_init
+        r = _f32 if self.float32 else float
+        self.phi = r(self.cfg.phi1)
+        self.u1 = r(self.cfg.u_init)
+        self.u2 = r(self.cfg.u_init)
         self.y1 = 0.0
         self.k = 0
         self.resets = 0
@@ -336,24 +350,29 @@ class Mfac:
         if not _finite(y_cm, yref_next_cm):
             raise ValueError("non-finite input")
         cfg = self.cfg
+        r = _f32 if self.float32 else float      # the rounding of each operation
+        y_cm, yref_next_cm = r(y_cm), r(yref_next_cm)
         if self.k == 0:
             self.y1 = y_cm
-        du = self.u1 - self.u2
-        dy = y_cm - self.y1
-        phi_c = self.phi + cfg.eta * du / (cfg.mu + du * du) * (dy - self.phi * du)
+        du = r(self.u1 - self.u2)
+        dy = r(y_cm - self.y1)
+        gain = r(r(r(cfg.eta) * du) / r(r(cfg.mu) + r(du * du)))
+        phi_c = r(self.phi + r(gain * r(dy - r(self.phi * du))))
         flags = 0
-        reset = (abs(phi_c) <= cfg.eps or abs(du) <= cfg.eps
+        eps = r(cfg.eps)
+        reset = (abs(phi_c) <= eps or abs(du) <= eps
                  or np.sign(phi_c) != np.sign(cfg.phi1))
-        phi = cfg.phi1 if reset else phi_c
+        phi = r(cfg.phi1) if reset else phi_c
         if reset:
             flags |= MFAC_FLAG_RESET
             self.resets += 1
-        u_raw = self.u1 + cfg.rho * phi / (cfg.lam + phi * phi) * (yref_next_cm - y_cm)
+        g_u = r(r(r(cfg.rho) * phi) / r(r(cfg.lam) + r(phi * phi)))
+        u_raw = r(self.u1 + r(g_u * r(yref_next_cm - y_cm)))
         if u_raw > cfg.u_max:
             flags |= MFAC_FLAG_SAT_HIGH
         if u_raw < cfg.u_min:
             flags |= MFAC_FLAG_SAT_LOW
-        u = _clamp(u_raw, cfg.u_min, cfg.u_max)
+        u = r(_clamp(u_raw, cfg.u_min, cfg.u_max))
         self.u2 = self.u1
         self.u1 = u
         self.y1 = y_cm

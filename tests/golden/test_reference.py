@@ -190,6 +190,34 @@ def test_mfac_reset_conditions() -> None:
     assert 0 < o.phi_candidate <= cfg.eps and o.flags & ref.MFAC_FLAG_RESET
 
 
+def test_mfac_float32_loses_increments_below_half_an_ulp_of_u() -> None:
+    """float32=True: the float firmware's arithmetic. At u = 530 an ulp is 2^-14 = 6.1e-5:
+    an increment G (y* - y) of 2.5e-5 (above eps = 1e-5) is lost in float (u unchanged,
+    next du = 0 and the reset rule sets phi back to phi1), kept in double (phi adapts)."""
+    cfg = ref.MfacConfig(phi1=0.2, u_init=-530.0, u_min=-800.0, u_max=100.0)
+    g = 31.7 * 0.2 / (0.03 + 0.04)                       # G at phi = phi1 [input units/cm]
+    err = 2.5e-5 / g                                     # an increment of 2.5e-5 in u
+    runs = {}
+    for f32 in (False, True):
+        m = ref.Mfac(cfg, float32=f32)
+        m.step(-2.0, -2.0)                               # first step: u stays u_init
+        o1 = m.step(-2.0, -2.0 + err)
+        o2 = m.step(-2.0, -2.0)
+        runs[f32] = (o1, o2)
+    (d1, d2), (s1, s2) = runs[False], runs[True]
+    assert d1.u == pytest.approx(-530.0 + 2.5e-5, abs=1e-9) and s1.u == -530.0
+    assert d2.du == pytest.approx(2.5e-5, abs=1e-9) and s2.du == 0.0
+    assert s2.flags & ref.MFAC_FLAG_RESET and s2.phi == ref._f32(0.2)
+    assert not d2.flags & ref.MFAC_FLAG_RESET and d2.phi != 0.2
+    # away from that edge both agree to float rounding
+    for f32 in (False, True):
+        m = ref.Mfac(cfg, float32=f32)
+        runs[f32] = [m.step(-2.0 + 0.01 * math.sin(k / 7), -2.0 + 0.01 * math.sin((k + 1) / 7)).u
+                     for k in range(50)]
+    assert runs[True] == pytest.approx(runs[False], rel=1e-5)
+    assert runs[True] != runs[False]
+
+
 def test_mfac_saturation_and_clamped_history() -> None:
     m = ref.Mfac(ref.MfacConfig(u_min=-10.0, u_max=10.0))
     o = m.step(-2.0, 0.0)                 # +2 cm error: u_raw = 113 -> 10
