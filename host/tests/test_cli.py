@@ -90,7 +90,7 @@ def test_scan_lists_every_node(pmactl, fake) -> None:
     fake(node=0)
     b = fake(node=5)
     b.set_state("FAULT", "SENSOR_TIMEOUT")
-    r = pmactl("scan", "--seconds", "0.3")
+    r = pmactl("scan", "--seconds", "1.0")              # 20 heartbeat periods of the fakes
     assert r.code == EXIT_OK
     lines = r.out.splitlines()
     assert lines[0].split() == ["node", "state", "fault", "controller", "reference", "flags"]
@@ -461,7 +461,7 @@ def test_record_mask_leaves_cells_empty(pmactl, fake, tmp_path: Path) -> None:
     n.rows[PROTO.param("telem.mask").id].value = 0b00011        # TELEM_A and TELEM_B only
     n.set_state("RUNNING")
     out = tmp_path / "run.csv"
-    assert pmactl("record", str(out), "--seconds", "0.3", "--no-log", "-q").code == EXIT_OK
+    assert pmactl("record", str(out), "--samples", "20", "--no-log", "-q").code == EXIT_OK
     _, rows = _read_csv(out)
     assert rows and all(row[4] == "" and row[1] != "" and row[3] != "" for row in rows)
     assert not (tmp_path / "run.blf").exists()
@@ -529,7 +529,7 @@ def test_plot(pmactl, fake, tmp_path: Path) -> None:
     n = fake()
     n.set_state("RUNNING")
     out = tmp_path / "run.csv"
-    assert pmactl("record", str(out), "--seconds", "0.4", "-q").code == EXIT_OK
+    assert pmactl("record", str(out), "--samples", "40", "-q").code == EXIT_OK
     r = pmactl("plot", str(out), bus=False)
     assert r.code == EXIT_OK, r.err
     written = [Path(line) for line in r.out.splitlines() if line.endswith(".png")]
