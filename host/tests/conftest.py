@@ -58,7 +58,7 @@ def pmactl(channel: str, capsys: pytest.CaptureFixture[str]) -> Callable[..., Re
     """pmactl(*args) -> Result: runs main() on the test's virtual channel."""
 
     def run(*args: str, bus: bool = True) -> Result:
-        argv = (["--interface", "virtual", "--channel", channel, "--timeout", "0.5"] if bus else []) + list(args)
+        argv = (["--interface", "virtual", "--channel", channel, "--timeout", "3"] if bus else []) + list(args)
         capsys.readouterr()
         code = main(argv)
         cap = capsys.readouterr()

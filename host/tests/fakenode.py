@@ -93,8 +93,6 @@ class FakeNode:
         self.received: list[tuple[str, dict[str, Any]]] = []   # every frame handled, in order
         self.setpoints: list[float] = []
         self.host_heartbeats = 0
-        self.last_host_hb = time.monotonic()
-        self.run_t0 = 0.0
         self.telem_ticks = 0
         # The host-heartbeat timeout counts telemetry ticks (as the firmware counts control
         # ticks), not wall time, so a slow test machine does not make it expire early.
@@ -125,8 +123,6 @@ class FakeNode:
             self.state = STATE[state]
             self.fault = FAULT[fault]
             if state == "RUNNING":
-                self.run_t0 = time.monotonic()
-                self.last_host_hb = time.monotonic()
                 self.telem_ticks = 0
                 self.ticks_since_host_hb = 0
                 self.host_timer_armed = False
@@ -233,7 +229,6 @@ class FakeNode:
         self.host_timer_armed = True
         if name == "HOST_HEARTBEAT":
             self.host_heartbeats += 1
-            self.last_host_hb = time.monotonic()
             self.ticks_since_host_hb = 0
         elif name == "SETPOINT":
             self.setpoints.append(float(sig["XrCm"]))
@@ -277,8 +272,6 @@ class FakeNode:
             if s != STATE["ARMED"]:
                 return RESULT["STATE"]
             self.state = STATE["RUNNING"]
-            self.run_t0 = time.monotonic()
-            self.last_host_hb = time.monotonic()
             self.telem_ticks = 0
             self.ticks_since_host_hb = 0
             return ok

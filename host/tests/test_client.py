@@ -91,7 +91,7 @@ def test_param_check() -> None:
 @pytest.fixture
 def client(channel: str):
     bus = can.Bus(interface="virtual", channel=channel)
-    yield PmaNode(bus, 0, load_protocol(), timeout_s=0.5)
+    yield PmaNode(bus, 0, load_protocol(), timeout_s=3.0)
     bus.shutdown()
 
 
@@ -213,10 +213,10 @@ def test_recorder_api(client, fake, tmp_path: Path) -> None:
     client.wait_state("ARMED", timeout_s=5.0)     # a heartbeat sent before set_state may still be queued
     progress = []
     rec = TelemetryRecorder(client, tmp_path / "r.csv", tmp_path / "r.blf", tmp_path / "r.meta.json")
-    s = rec.run(seconds=0.5, start=True, progress=progress.append, progress_every_s=0.1)
-    assert s.rows > 10 and s.incomplete == 0 and s.lost == 0 and s.stop_reason == "0.5 s recorded"
+    s = rec.run(samples=60, start=True, progress=progress.append, progress_every_s=0.1)
+    assert s.rows == 60 and s.incomplete == 0 and s.lost == 0 and s.stop_reason == "60 samples recorded"
     assert s.max_abs_e_cm is not None and s.breaches == 0
-    assert len(progress) >= 3 and progress[-1].rows == s.rows
+    assert len(progress) >= 1 and progress[-1].rows == s.rows
     assert rec.params["ctrl.mode"] == 1
     rec2 = read_recording(tmp_path / "r.csv")
     assert len(rec2) == s.rows and rec2.names["internal1"] == "lambda1" and rec2.units["internal2"] == "cm/s"
