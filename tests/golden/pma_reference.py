@@ -17,7 +17,8 @@ a saturation decision) that the generator uses to keep the vectors away from
 decision thresholds.
 
 Configuration values are used exactly as passed; the generator passes the
-float32-rounded values the C code receives.
+float32-rounded values the C code receives. ``Mfac(cfg, float32=True)`` rounds each
+operation to single precision instead (closed-loop predictions of the float firmware).
 """
 from __future__ import annotations
 
@@ -333,11 +334,12 @@ class Mfac:
         cfg.validate()
         self.cfg = cfg
         self.float32 = float32
+        self._round = _f32 if float32 else float     # the rounding of each operation
         self.reset()
 
     def reset(self) -> None:
         """Back to the start conditions."""
-        r = _f32 if self.float32 else float
+        r = self._round
         self.phi = r(self.cfg.phi1)
         self.u1 = r(self.cfg.u_init)
         self.u2 = r(self.cfg.u_init)
@@ -350,14 +352,14 @@ class Mfac:
         if not _finite(y_cm, yref_next_cm):
             raise ValueError("non-finite input")
         cfg = self.cfg
-        r = _f32 if self.float32 else float      # the rounding of each operation
+        r = self._round
         y_cm, yref_next_cm = r(y_cm), r(yref_next_cm)
         if self.k == 0:
             self.y1 = y_cm
         du = r(self.u1 - self.u2)
         dy = r(y_cm - self.y1)
-        gain = r(r(r(cfg.eta) * du) / r(r(cfg.mu) + r(du * du)))
-        phi_c = r(self.phi + r(gain * r(dy - r(self.phi * du))))
+        g_phi = r(r(r(cfg.eta) * du) / r(r(cfg.mu) + r(du * du)))
+        phi_c = r(self.phi + r(g_phi * r(dy - r(self.phi * du))))
         flags = 0
         eps = r(cfg.eps)
         reset = (abs(phi_c) <= eps or abs(du) <= eps
