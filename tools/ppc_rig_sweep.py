@@ -265,6 +265,8 @@ def simulate(cfg: RunConfig) -> dict[str, Any]:
             ff_init=fw["ppc.ff_init"], period_s=period))
         t_u = float(fw["ppc.t_u_s"])
         w1 = float(fw["ppc.w1_cm"])
+        if fw["ppc.obs_pos"] and int(fw["vel.kind"]) != 1:
+            start_refused = start_refused or "PMA_ERR_RANGE (ppc.obs_pos needs vel.kind = 1)"
     elif mode == MODE_MFAC:
         mfac = ref_mod.Mfac(ref_mod.MfacConfig(
             eta=fw["mfac.eta"], mu=fw["mfac.mu"], rho=fw["mfac.rho"], lam=fw["mfac.lambda"],
@@ -333,10 +335,11 @@ def simulate(cfg: RunConfig) -> dict[str, Any]:
             if not sensor_ok:
                 faults.append(f"sensor fault at t = {t:.3f}")
             v = vel.step(x)
-            xr, _ = ref.eval(t)
+            xr, xr_dot = ref.eval(t)
             fl = 0
-            if ppc is not None:
-                o = ppc.step(t, x, v, xr)
+            if ppc is not None:  # the options choose the law's inputs, as firmware/app/controller.c
+                o = ppc.step(t, vel.xh if fw["ppc.obs_pos"] else x,
+                             v - xr_dot if fw["ppc.ref_vel"] else v, xr)
                 u = o.u
                 fl = o.flags
             elif mfac is not None:

@@ -40,6 +40,11 @@ int pma_ctrl_start(pma_ctrl_t *s, const pma_params_t *p, float period_s)
     pma_velest_config_t vc = {.kind = (uint8_t)p->vel_kind, .fc_hz = p->vel_fc_hz,
                               .period_s = period_s};
     CHECK(pma_velest_init_f32(&s->vel, &vc));
+    if (s->mode == PMA_CTRL_MODE_PPC) {
+        s->ppc_ref_vel = (uint8_t)(p->ppc_ref_vel != 0);
+        s->ppc_obs_pos = (uint8_t)(p->ppc_obs_pos != 0);
+        if (s->ppc_obs_pos && vc.kind != PMA_VELEST_TRACKING) return PMA_ERR_RANGE;
+    }
 
     switch (s->mode) {
     case PMA_CTRL_MODE_PPC: {
@@ -95,19 +100,23 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
     o->flags = 0;
     o->barrier = 0;
     o->internal1 = o->internal2 = 0.0f;
-    CHECK(pma_ref_eval_f32(&s->ref, t_s, &o->xr_cm, NULL));
+    CHECK(pma_ref_eval_f32(&s->ref, t_s, &o->xr_cm, &o->xr_dot_cm_s));
     CHECK(pma_velest_step_f32(&s->vel, x_cm, &o->v_cm_s));
     o->e_cm = x_cm - o->xr_cm;
 
     float out = 0.0f;
     switch (s->mode) {
-    case PMA_CTRL_MODE_PPC:
-        CHECK(pma_ppc_step_f32(&s->c.ppc, t_s, x_cm, o->v_cm_s, o->xr_cm, &out));
+    case PMA_CTRL_MODE_PPC: {
+        /* the options (controller.h) choose the law's inputs */
+        const float x_law_cm = s->ppc_obs_pos ? s->vel.xh : x_cm;
+        const float v_law_cm_s = s->ppc_ref_vel ? o->v_cm_s - o->xr_dot_cm_s : o->v_cm_s;
+        CHECK(pma_ppc_step_f32(&s->c.ppc, t_s, x_law_cm, v_law_cm_s, o->xr_cm, &out));
         o->flags = s->c.ppc.out.flags;
         o->internal1 = s->c.ppc.out.lambda1_cm;
         o->internal2 = s->c.ppc.out.lambda2_cm_s;
         o->barrier = (uint8_t)((o->flags & (PMA_PPC_FLAG_BARRIER1 | PMA_PPC_FLAG_BARRIER2)) != 0);
         break;
+    }
     case PMA_CTRL_MODE_MFAC: {
         /* MFAC's law uses the reference of the next sample, y*(k+1) */
         float xr_next;

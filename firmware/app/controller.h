@@ -16,7 +16,8 @@
 
 typedef struct pma_ctrl_out {
     float t_s;              /* control time since START */
-    float xr_cm, e_cm;      /* reference and e = x - xr */
+    float xr_cm, e_cm;      /* reference and e = x - xr (x the raw sample) */
+    float xr_dot_cm_s;      /* the reference's derivative (0 for STREAM) */
     float v_cm_s;           /* velocity estimate */
     float u;                /* output, within ctrl.u_min..u_max [input unit] */
     float internal1, internal2; /* TELEM_D: PPC lambda1 [cm], lambda2 [cm/s]; MFAC phi, u(k-1); PID I, D */
@@ -35,6 +36,8 @@ typedef struct pma_ctrl {
         pma_mfac_f32_t mfac;
         pma_pid_f32_t pid;
     } c;
+    uint8_t ppc_ref_vel;    /* option ppc.ref_vel: the law damps x' - x_r' */
+    uint8_t ppc_obs_pos;    /* option ppc.obs_pos: the law's x is the observer's x_hat */
     uint32_t breaches;      /* steps with a barrier clamp since START */
     float stream_margin_cm; /* STREAM targets keep this far inside the band (PPC: w1) */
     pma_ctrl_out_t out;
@@ -43,7 +46,20 @@ typedef struct pma_ctrl {
 /* Builds and validates everything from p for control period period_s; checks
  * the reference against the constraint band (safety.x_min/x_max_cm; with
  * margin ppc.w1_cm for PPC when ppc.band_check) over ref.horizon_s.
- * PMA_OK or the first validation error (PMA_ERR_RANGE, PMA_ERR_BAND, ...). */
+ * PMA_OK or the first validation error (PMA_ERR_RANGE, PMA_ERR_BAND, ...;
+ * PMA_ERR_RANGE also for ppc.obs_pos without the tracking observer).
+ *
+ * The PPC options beyond the paper (both off by default) choose what the
+ * unchanged law (pma/ppc.h) is fed, so that eq. 15-22 stay as written:
+ *  - ppc.ref_vel: the velocity input is x' - x_r' instead of x', i.e.
+ *    lambda2 = alpha (x' - x_r') - theta. The paper's lambda2 damps the
+ *    absolute velocity, which on a moving reference acts against the
+ *    motion; with the feedforward integrator (which then integrates x' and
+ *    so becomes a stiffness on x rather than on e) that is a lag.
+ *  - ppc.obs_pos: the position input is the tracking observer's estimate
+ *    x_hat (vel.kind 1, bandwidth vel.fc_hz) instead of the raw sample: the
+ *    law's error e = x_hat - x_r passes the sensor's noise and quantisation
+ *    to u only through the observer's low-pass. */
 int pma_ctrl_start(pma_ctrl_t *s, const pma_params_t *p, float period_s);
 
 /* One step at control time t_s with position x_cm; openloop_u is the live

@@ -26,6 +26,8 @@ enum pma_param_id {
     PMA_PARAM_PPC_FF_GAIN_PER_S = 39,
     PMA_PARAM_PPC_FF_INIT = 40,
     PMA_PARAM_PPC_BAND_CHECK = 41,
+    PMA_PARAM_PPC_REF_VEL = 42,
+    PMA_PARAM_PPC_OBS_POS = 43,
     PMA_PARAM_MFAC_ETA = 48,
     PMA_PARAM_MFAC_MU = 49,
     PMA_PARAM_MFAC_RHO = 50,
@@ -74,7 +76,7 @@ enum pma_param_id {
     PMA_PARAM_SAFETY_SAFE_KPA = 168,
 };
 
-#define PMA_PARAM_COUNT 66u
+#define PMA_PARAM_COUNT 68u
 
 #define PMA_SYS_PLANT_BRIDGE_OFF 0u
 #define PMA_SYS_PLANT_BRIDGE_ON 1u
@@ -118,6 +120,8 @@ typedef struct pma_params {
     float ppc_ff_gain_per_s;           /* id 39 [1/s] */
     float ppc_ff_init;                 /* id 40 [input unit] */
     uint32_t ppc_band_check;              /* id 41 */
+    uint32_t ppc_ref_vel;                 /* id 42 */
+    uint32_t ppc_obs_pos;                 /* id 43 */
     float mfac_eta;                    /* id 48 */
     float mfac_mu;                     /* id 49 */
     float mfac_rho;                    /* id 50 */

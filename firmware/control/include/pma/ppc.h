@@ -110,6 +110,9 @@ int pma_ppc_init_f32(pma_ppc_f32_t *s, const pma_ppc_config_t *cfg);
 void pma_ppc_reset_f32(pma_ppc_f32_t *s);
 /* One step. t_s: time since task start [s] (>= 0); x_cm: measured position;
  * v_cm_s: estimated velocity; xr_cm: reference. Writes the input to *u.
+ * (The application's options ppc.ref_vel and ppc.obs_pos feed x' - x_r' as
+ * v_cm_s and the velocity observer's position estimate as x_cm; the law
+ * itself is unchanged: firmware/app/controller.h.)
  * Non-finite inputs: returns PMA_ERR_NOT_FINITE, *u and state unchanged.
  * Returns PMA_OK, or a negative code. */
 int pma_ppc_step_f32(pma_ppc_f32_t *s, float t_s, float x_cm, float v_cm_s,
