@@ -7,6 +7,7 @@ application does (firmware/app/app.c, controller.c, actuator.c, hal/src/*_scalin
     counts = rig.sensor_counts()                      # 12-bit ADC sample
     x      = adc.offset_cm + adc.gain_cm_per_count * counts
     (RUNNING only) v = velest(x); xr = ref(t); u = ctrl(t, x, v, xr)
+                   (PPC with ppc.obs_pos / ppc.ref_vel: x_hat for x, v - xr' for v)
     p      = p0 + polarity * kpa_per_u * u, clamped to [p_min, p_max], slew-limited
     rig.apply_dac(round(dac.counts_at_zero_kpa + dac.counts_per_kpa * p)); rig.step(T)
 

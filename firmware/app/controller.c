@@ -40,14 +40,12 @@ int pma_ctrl_start(pma_ctrl_t *s, const pma_params_t *p, float period_s)
     pma_velest_config_t vc = {.kind = (uint8_t)p->vel_kind, .fc_hz = p->vel_fc_hz,
                               .period_s = period_s};
     CHECK(pma_velest_init_f32(&s->vel, &vc));
-    if (s->mode == PMA_CTRL_MODE_PPC) {
-        s->ppc_ref_vel = (uint8_t)(p->ppc_ref_vel != 0);
-        s->ppc_obs_pos = (uint8_t)(p->ppc_obs_pos != 0);
-        if (s->ppc_obs_pos && vc.kind != PMA_VELEST_TRACKING) return PMA_ERR_RANGE;
-    }
 
     switch (s->mode) {
     case PMA_CTRL_MODE_PPC: {
+        s->ppc_ref_vel = (uint8_t)(p->ppc_ref_vel != 0);
+        s->ppc_obs_pos = (uint8_t)(p->ppc_obs_pos != 0);
+        if (s->ppc_obs_pos && vc.kind != PMA_VELEST_TRACKING) return PMA_ERR_RANGE;
         pma_ppc_config_t c;
         pma_ppc_default_config(&c);
         c.a_cm_s = p->ppc_a_cm_s;

@@ -17,7 +17,7 @@
 typedef struct pma_ctrl_out {
     float t_s;              /* control time since START */
     float xr_cm, e_cm;      /* reference and e = x - xr (x the raw sample) */
-    float xr_dot_cm_s;      /* the reference's derivative (0 for STREAM) */
+    float xr_dot_cm_s;      /* the reference's derivative [cm/s] (STREAM: this tick's rate-limited step / period) */
     float v_cm_s;           /* velocity estimate */
     float u;                /* output, within ctrl.u_min..u_max [input unit] */
     float internal1, internal2; /* TELEM_D: PPC lambda1 [cm], lambda2 [cm/s]; MFAC phi, u(k-1); PID I, D */
