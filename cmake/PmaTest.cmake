@@ -1,12 +1,13 @@
 # Test and benchmark helpers (included by the top-level CMakeLists.txt).
 #
 #   pma_add_test(<name> SOURCES <files...> [LIBRARIES <libs...>] [INCLUDES <dirs...>])
-#       Executable <name> linked with cmocka (+ the given libraries), registered with add_test().
-#       host: Debian's libcmocka-dev; ASan+UBSan (see below).
-#       ARM:  cmocka 1.1.5 cross-compiled from source (`cmocka_cross`), the emulated board's
-#             startup code + linker script (`pma_board`), run under QEMU through
-#             CMAKE_CROSSCOMPILING_EMULATOR (set by cmake/arm-none-eabi.cmake).
-#       Timeout: PMA_TEST_TIMEOUT seconds (default 120).
+#       Executable <name> linked with Unity (ThrowTheSwitch, v2.6.1, fetched into .deps/unity by
+#       tools/fetch-deps.sh) and the project's test support (`pma_test`: tests/support/pma_test.h,
+#       the shared assertion helpers), registered with add_test(). Each test prints Unity's
+#       summary ("N Tests M Failures K Ignored", then OK or FAIL) and exits with the number of
+#       failures. host: ASan+UBSan (see below). ARM: the emulated board's startup code + linker
+#       script (`pma_board`), run under QEMU through CMAKE_CROSSCOMPILING_EMULATOR (set by
+#       cmake/arm-none-eabi.cmake). Timeout: PMA_TEST_TIMEOUT seconds (default 120).
 #
 #   pma_add_bench(<name> SOURCES <files...> [LIBRARIES <libs...>] [INCLUDES <dirs...>])
 #       Executable <name>, NOT a test (benchmarks print figures and never assert), linked with
@@ -19,14 +20,33 @@
 # to the compile and link options of every target defined after it is included (directory
 # scope: add_compile_options/add_link_options). The top-level CMakeLists.txt includes it before
 # add_subdirectory(firmware), so the firmware libraries the tests link are instrumented too.
+# Unity itself is defined before the options, uninstrumented (as a system library would be), so
+# that it links into ASan programs and into the one test that runs without ASan alike.
 # Host builds with PMA_BUILD_TESTS=OFF get no sanitizers. Set PMA_SANITIZE=OFF to turn them off.
 
 include_guard(GLOBAL)
 
 set(PMA_TEST_TIMEOUT 120 CACHE STRING "Timeout of each test in seconds")
-set(PMA_DEPS_DIR "${CMAKE_SOURCE_DIR}/.deps" CACHE PATH
-    "Third-party sources fetched by tools/fetch-deps.sh (cmocka for the ARM builds)")
 set(PMA_QEMU_DIR "${CMAKE_SOURCE_DIR}/tests/qemu")
+set(PMA_TEST_SUPPORT_DIR "${CMAKE_SOURCE_DIR}/tests/support")
+
+# --------------------------------------------------------------------------------------------
+# Unity: `pma_unity`, and `pma_test` (Unity + tests/support) is what tests link, whatever the
+# target. Configuration, the same on every target:
+#   UNITY_INCLUDE_DOUBLE    TEST_ASSERT_DOUBLE_* (golden vectors are doubles);
+#   UNITY_SUPPORT_64        64-bit integer assertions on 32-bit cores too (UNITY_INT is 64 bits);
+#   UNITY_USE_FLUSH_STDOUT  flush after each test, so a fault under QEMU loses no output.
+include(PmaDeps)
+pma_require_dep(unity src/unity.c)
+add_library(pma_unity STATIC "${PMA_DEPS_DIR}/unity/src/unity.c")
+target_include_directories(pma_unity SYSTEM PUBLIC "${PMA_DEPS_DIR}/unity/src")
+target_compile_definitions(pma_unity PUBLIC UNITY_INCLUDE_DOUBLE UNITY_SUPPORT_64
+                                            UNITY_USE_FLUSH_STDOUT)
+# An object library, so that the weak default setUp()/tearDown() are in every test executable
+# whatever the link order (a test's own definitions override them).
+add_library(pma_test OBJECT "${PMA_TEST_SUPPORT_DIR}/pma_test.c")
+target_include_directories(pma_test PUBLIC "${PMA_TEST_SUPPORT_DIR}")
+target_link_libraries(pma_test PUBLIC pma_unity)
 
 if(PMA_TARGET STREQUAL "host")
   # ON (default) = "address,undefined"; "undefined" for programs that run inside the
@@ -49,85 +69,6 @@ elseif(NOT CMAKE_CROSSCOMPILING OR NOT DEFINED PMA_QEMU_BOARD)
   message(FATAL_ERROR "PMA_TARGET=${PMA_TARGET} needs the ARM toolchain file: "
                       "use the preset (cmake --preset ${PMA_TARGET}) or "
                       "-DCMAKE_TOOLCHAIN_FILE=cmake/arm-none-eabi.cmake")
-endif()
-
-# --------------------------------------------------------------------------------------------
-# cmocka: `pma_cmocka` is what tests link, whatever the target.
-add_library(pma_cmocka INTERFACE)
-
-if(PMA_TARGET STREQUAL "host")
-  find_path(PMA_CMOCKA_INCLUDE_DIR cmocka.h)
-  find_library(PMA_CMOCKA_LIBRARY cmocka)
-  if(NOT PMA_CMOCKA_INCLUDE_DIR OR NOT PMA_CMOCKA_LIBRARY)
-    message(FATAL_ERROR "cmocka not found for the host build: apt-get install libcmocka-dev")
-  endif()
-  target_include_directories(pma_cmocka SYSTEM INTERFACE "${PMA_CMOCKA_INCLUDE_DIR}")
-  target_link_libraries(pma_cmocka INTERFACE "${PMA_CMOCKA_LIBRARY}")
-else()
-  set(_pma_cmocka_src "${PMA_DEPS_DIR}/cmocka-1.1.5")
-  if(NOT EXISTS "${_pma_cmocka_src}/src/cmocka.c")
-    message(FATAL_ERROR "cmocka 1.1.5 sources not found in ${_pma_cmocka_src}.\n"
-                        "Run: bash tools/fetch-deps.sh   (fetches Debian's cmocka source package "
-                        "into .deps/; or set PMA_DEPS_DIR)")
-  endif()
-  # config.h for newlib on bare metal. Deliberately absent: sigsetjmp (newlib has none: plain
-  # setjmp/longjmp), __thread (needs a thread pointer we do not have), clock_gettime and
-  # struct timespec (no clock: cmocka reports test times as 0), strsignal.
-  set(_pma_cmocka_cfg "${CMAKE_BINARY_DIR}/cmocka_cross")
-  file(CONFIGURE OUTPUT "${_pma_cmocka_cfg}/config.h" CONTENT [[
-/* cmocka 1.1.5 configuration for arm-none-eabi + newlib (generated by cmake/PmaTest.cmake) */
-#define PACKAGE "cmocka"
-#define VERSION "1.1.5"
-#define HAVE_INTTYPES_H 1
-#define HAVE_MALLOC_H 1
-#define HAVE_SETJMP_H 1
-#define HAVE_SIGNAL_H 1
-#define HAVE_STDARG_H 1
-#define HAVE_STDDEF_H 1
-#define HAVE_STDINT_H 1
-#define HAVE_STDIO_H 1
-#define HAVE_STDLIB_H 1
-#define HAVE_STRINGS_H 1
-#define HAVE_STRING_H 1
-#define HAVE_CALLOC 1
-#define HAVE_EXIT 1
-#define HAVE_FPRINTF 1
-#define HAVE_SNPRINTF 1
-#define HAVE_VSNPRINTF 1
-#define HAVE_FREE 1
-#define HAVE_LONGJMP 1
-#define HAVE_MALLOC 1
-#define HAVE_MEMCPY 1
-#define HAVE_MEMSET 1
-#define HAVE_PRINTF 1
-#define HAVE_SETJMP 1
-#define HAVE_SIGNAL 1
-#define HAVE_STRCMP 1
-#define HAVE_STRCPY 1
-#define WORDS_SIZEOF_VOID_P 4
-]])
-  # Debian's newlib printf has no C99 size formats (%zu, %zd): cmocka's test counts use the
-  # PRIdS macro (overridden below: size_t is unsigned int on arm-none-eabi), and its one literal
-  # "%zu" (the leaked-blocks count) is rewritten in a build-tree copy of cmocka.c. Nothing else
-  # is changed; the sources in PMA_DEPS_DIR stay pristine.
-  file(READ "${_pma_cmocka_src}/src/cmocka.c" _pma_cmocka_c)
-  string(REPLACE "%zu" "%u" _pma_cmocka_c "${_pma_cmocka_c}")
-  file(WRITE "${_pma_cmocka_cfg}/cmocka.c.tmp" "${_pma_cmocka_c}")
-  configure_file("${_pma_cmocka_cfg}/cmocka.c.tmp" "${_pma_cmocka_cfg}/cmocka.c" COPYONLY)
-  set_property(DIRECTORY APPEND PROPERTY CMAKE_CONFIGURE_DEPENDS "${_pma_cmocka_src}/src/cmocka.c")
-  add_library(cmocka_cross STATIC "${_pma_cmocka_cfg}/cmocka.c")
-  target_include_directories(cmocka_cross SYSTEM PUBLIC "${_pma_cmocka_src}/include")
-  target_include_directories(cmocka_cross PRIVATE "${_pma_cmocka_cfg}")
-  target_compile_definitions(cmocka_cross PRIVATE HAVE_CONFIG_H=1 "PRIdS=\"d\"")
-  # Upstream compiles cmocka as gnu99: it uses strdup(), which newlib declares only outside
-  # strict ISO mode, so this one library is built as gnu11 (C_EXTENSIONS ON).
-  set_target_properties(cmocka_cross PROPERTIES C_EXTENSIONS ON)
-  # Third-party code: the project's -Wall -Wextra -Werror stay on; only the warnings cmocka's
-  # own source triggers are silenced, for this one library:
-  #   -Wno-clobbered  cmocka_run_one_test_or_fixture(): `rc` "might be clobbered by longjmp";
-  #                   a false positive (both paths after setjmp assign rc before reading it).
-  target_compile_options(cmocka_cross PRIVATE -Wno-clobbered)
-  target_link_libraries(pma_cmocka INTERFACE cmocka_cross)
 endif()
 
 # --------------------------------------------------------------------------------------------
@@ -182,7 +123,7 @@ endfunction()
 
 function(pma_add_test name)
   _pma_add_program(${name} ${ARGN})
-  target_link_libraries(${name} PRIVATE pma_cmocka)
+  target_link_libraries(${name} PRIVATE pma_test)
   add_test(NAME ${name} COMMAND ${name})
   set_tests_properties(${name} PROPERTIES TIMEOUT ${PMA_TEST_TIMEOUT})
 endfunction()

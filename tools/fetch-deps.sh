@@ -1,109 +1,94 @@
 #!/usr/bin/env bash
-# Fetch the third-party sources the ARM (cross) builds need into .deps/.
+# Fetch the project's third-party C sources into .deps/, each pinned to an upstream commit and
+# verified by that commit id. This is the one mechanism for third-party sources; CMake only
+# checks that they are there (cmake/PmaDeps.cmake).
 #
-#   cmocka 1.1.5  Debian bookworm source package -> .deps/cmocka-1.1.5
-#                 (cross-compiled by cmake/PmaTest.cmake as the static library `cmocka_cross`)
+#   name             upstream                                              tag     licence
+#   unity            https://github.com/ThrowTheSwitch/Unity               v2.6.1  MIT
+#   cmsis_device_g4  https://github.com/STMicroelectronics/cmsis_device_g4 v1.2.4  Apache-2.0
+#   cmsis_6          https://github.com/ARM-software/CMSIS_6               v6.3.0  Apache-2.0
 #
-# Idempotent: does nothing when the sources are already unpacked. Works on a fresh Debian 12
-# machine as root: if no deb-src entry for bookworm is configured it writes
-# /etc/apt/sources.list.d/pma-src.sources and runs `apt-get update`.
-# Host builds do not need this (they use Debian's libcmocka-dev).
+# Unity is the C test framework (every C test, host and QEMU); cmsis_device_g4 (ST's
+# stm32g474xx.h) and cmsis_6 (Arm's CMSIS-Core, core_cm4.h) are the board port's register
+# definitions.
 #
-# Environment: PMA_DEPS_DIR overrides the destination (default: <repo>/.deps), like the CMake
-# cache variable of the same name.
+# Environment:
+#   PMA_DEPS_DIR     destination (default: <repo>/.deps), like the CMake cache variable.
+#   PMA_DEPS_MIRROR  a folder of git bundles unity.bundle, cmsis_device_g4.bundle,
+#                    cmsis_6.bundle that hold the pinned commits, for machines without access to
+#                    GitHub. Without it the sources come from GitHub.
+#
+# Idempotent: a source already checked out at its pinned commit is left alone; one at another
+# commit (or damaged) is fetched again. A fetch goes to a temporary folder and is moved into
+# place only once its commit is verified, so an interrupted run leaves nothing half-done.
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 DEPS=${PMA_DEPS_DIR:-$ROOT/.deps}
-CMOCKA_VERSION=1.1.5
-CMOCKA_DIR=$DEPS/cmocka-$CMOCKA_VERSION
-SRC_LIST=/etc/apt/sources.list.d/pma-src.sources
+MIRROR=${PMA_DEPS_MIRROR:-}
+
+# name | upstream URL | commit (40 hex digits) | tag | licence | a file that must exist
+SOURCES=(
+  "unity|https://github.com/ThrowTheSwitch/Unity.git|cbcd08fa7de711053a3deec6339ee89cad5d2697|v2.6.1|MIT|src/unity.c"
+  "cmsis_device_g4|https://github.com/STMicroelectronics/cmsis_device_g4.git|f4ee399953e3b5c437788526e93b10efa5fad4fa|v1.2.4|Apache-2.0|Include/stm32g474xx.h"
+  "cmsis_6|https://github.com/ARM-software/CMSIS_6.git|45dab712ad84f8cbbf2b7bfc089c19088507df6f|v6.3.0|Apache-2.0|CMSIS/Core/Include/core_cm4.h"
+)
 
 say() { printf 'fetch-deps: %s\n' "$*"; }
 die() { printf 'fetch-deps: error: %s\n' "$*" >&2; exit 1; }
 
-if [[ -f $CMOCKA_DIR/src/cmocka.c && -f $CMOCKA_DIR/include/cmocka.h ]]; then
-    say "cmocka $CMOCKA_VERSION already unpacked at $CMOCKA_DIR: nothing to do"
-    exit 0
+command -v git >/dev/null || die "git not found (apt-get install git)"
+export GIT_TERMINAL_PROMPT=0   # never wait for credentials: an unreachable host fails at once
+
+if [[ -n $MIRROR && ! -d $MIRROR ]]; then
+  die "PMA_DEPS_MIRROR=$MIRROR is not a folder (it names a folder of git bundles)"
 fi
 
-command -v apt-get >/dev/null || die "apt-get not found (this script expects Debian 12 / bookworm)"
-
-# Is a deb-src entry for bookworm configured? Ask apt itself (it parses both the one-line and the
-# deb822 formats); --no-release-info lists entries whose index files are not downloaded yet.
-have_bookworm_src() {
-    apt-get indextargets --no-release-info --format '$(TARGET_OF) $(RELEASE)' 2>/dev/null \
-        | grep -qx 'deb-src bookworm'
+# checked_out DIR COMMIT FILE: true when DIR is a checkout of exactly COMMIT with FILE present
+# and no local change to tracked files.
+checked_out() {
+  [[ -d $1/.git && -f $1/$3 ]] || return 1
+  [[ $(git -C "$1" rev-parse -q --verify 'HEAD^{commit}' 2>/dev/null) == "$2" ]] || return 1
+  git -C "$1" diff --quiet HEAD -- 2>/dev/null
 }
 
-need_update=0
-if have_bookworm_src; then
-    say "a deb-src entry for bookworm is configured"
-else
-    [[ $(id -u) -eq 0 ]] || die "no deb-src entry for bookworm is configured and I am not root: run me as root, or add one"
-    say "no deb-src entry for bookworm: writing $SRC_LIST"
-    cat >"$SRC_LIST" <<'EOF'
-Types: deb-src
-URIs: http://deb.debian.org/debian
-Suites: bookworm
-Components: main
-Signed-By: /usr/share/keyrings/debian-archive-keyring.gpg
-EOF
-    need_update=1
-fi
-
-# The entry may be configured while its Sources index was never downloaded.
-if [[ $need_update -eq 0 ]] && ! apt-cache showsrc cmocka 2>/dev/null | grep -q "^Version: $CMOCKA_VERSION-"; then
-    say "the Sources index does not list cmocka $CMOCKA_VERSION yet"
-    need_update=1
-fi
-if [[ $need_update -eq 1 ]]; then
-    [[ $(id -u) -eq 0 ]] || die "apt-get update is needed and I am not root"
-    say "running apt-get update"
-    apt-get update -q
-fi
-
 mkdir -p "$DEPS"
-cd "$DEPS"
-
-shopt -s nullglob
-dscs=(cmocka_"$CMOCKA_VERSION"-*.dsc)
-if [[ ${#dscs[@]} -eq 0 ]]; then
-    say "downloading the cmocka source package (bookworm) into $DEPS"
-    # apt-get checks the files against the signed Release/Sources indexes.
-    apt-get source --download-only -q cmocka/bookworm
-    dscs=(cmocka_"$CMOCKA_VERSION"-*.dsc)
-    [[ ${#dscs[@]} -gt 0 ]] || die "apt-get source did not download cmocka $CMOCKA_VERSION (got: $(ls))"
-else
-    say "source package already downloaded: ${dscs[0]}"
-fi
-dsc=${dscs[${#dscs[@]}-1]}
-
-# Unpack into a temporary directory, then move into place, so an interrupted run leaves nothing
-# half-unpacked behind.
-tmp=$(mktemp -d "$DEPS/.unpack.XXXXXX")
-trap 'rm -rf "$tmp"' EXIT
-if command -v dpkg-source >/dev/null; then
-    say "unpacking $dsc with dpkg-source (applies the Debian patches)"
-    dpkg-source -q -x "$dsc" "$tmp/cmocka-$CMOCKA_VERSION"
-else
-    say "dpkg-source not found: unpacking $dsc with tar and applying debian/patches with patch"
-    orig=(cmocka_"$CMOCKA_VERSION".orig.tar.*)
-    debtar=(cmocka_"${dsc#cmocka_}")
-    debtar=("${debtar[0]%.dsc}".debian.tar.*)
-    [[ ${#orig[@]} -gt 0 && ${#debtar[@]} -gt 0 ]] || die "orig or debian tarball missing next to $dsc"
-    mkdir "$tmp/cmocka-$CMOCKA_VERSION"
-    tar -xf "${orig[0]}" -C "$tmp/cmocka-$CMOCKA_VERSION" --strip-components=1
-    tar -xf "${debtar[0]}" -C "$tmp/cmocka-$CMOCKA_VERSION"
-    if [[ -f $tmp/cmocka-$CMOCKA_VERSION/debian/patches/series ]]; then
-        while read -r p _; do
-            [[ -z $p || $p == \#* ]] && continue
-            say "  applying $p"
-            patch -s -p1 -d "$tmp/cmocka-$CMOCKA_VERSION" <"$tmp/cmocka-$CMOCKA_VERSION/debian/patches/$p"
-        done <"$tmp/cmocka-$CMOCKA_VERSION/debian/patches/series"
+for entry in "${SOURCES[@]}"; do
+  IFS='|' read -r name url commit tag licence probe <<<"$entry"
+  dest=$DEPS/$name
+  if checked_out "$dest" "$commit" "$probe"; then
+    say "$name $tag ($licence) at ${commit:0:12}: present"
+    continue
+  fi
+  if [[ -n $MIRROR ]]; then
+    src=$MIRROR/$name.bundle
+    [[ -f $src ]] || die "PMA_DEPS_MIRROR=$MIRROR has no $name.bundle"
+  else
+    src=$url
+  fi
+  say "fetching $name $tag ($licence) at $commit from $src"
+  tmp=$(mktemp -d "$DEPS/.fetch-$name.XXXXXX")
+  # shellcheck disable=SC2064 # expand $tmp now: it changes with each source
+  trap "rm -rf '$tmp'" EXIT
+  git init -q "$tmp"
+  # A bundle or a server that refuses fetches by commit: fetch every ref and tag instead.
+  if ! git -C "$tmp" fetch -q --depth 1 "$src" "$commit" 2>/dev/null; then
+    if ! git -C "$tmp" fetch -q --tags "$src" '+refs/heads/*:refs/remotes/src/*' 2>"$tmp.err"; then
+      cat "$tmp.err" >&2; rm -f "$tmp.err"
+      if [[ -z $MIRROR ]]; then
+        die "cannot fetch $name from $url. Without access to GitHub, set PMA_DEPS_MIRROR to a folder of git bundles (unity.bundle, cmsis_device_g4.bundle, cmsis_6.bundle) that hold the pinned commits, e.g. PMA_DEPS_MIRROR=/path/to/vendor bash tools/fetch-deps.sh"
+      fi
+      die "cannot fetch $name from the bundle $src"
     fi
-fi
-[[ -f $tmp/cmocka-$CMOCKA_VERSION/src/cmocka.c ]] || die "unpacked tree has no src/cmocka.c"
-rm -rf "$CMOCKA_DIR"
-mv "$tmp/cmocka-$CMOCKA_VERSION" "$CMOCKA_DIR"
-say "cmocka $CMOCKA_VERSION ready at $CMOCKA_DIR"
+    rm -f "$tmp.err"
+  fi
+  git -C "$tmp" -c advice.detachedHead=false checkout -q "$commit" 2>/dev/null ||
+    die "$src does not hold commit $commit ($name $tag)"
+  got=$(git -C "$tmp" rev-parse 'HEAD^{commit}')
+  [[ $got == "$commit" ]] || die "$name: checked out $got, expected $commit"
+  [[ -f $tmp/$probe ]] || die "$name at $commit has no $probe"
+  rm -rf "$dest"
+  mv "$tmp" "$dest"
+  trap - EXIT
+  say "$name $tag ready at $dest"
+done
