@@ -11,10 +11,9 @@
 # What this file sets for every target of the build:
 #   - the core/ABI flags above, -ffunction-sections -fdata-sections, -Wl,--gc-sections;
 #   - the C library is the FULL newlib, not newlib-nano: nano's printf cannot print 64-bit
-#     integers (%llx), and cmocka prints every integer assertion failure with %llx (its
-#     LargestIntegralType is unsigned long long on 32-bit targets): with nano a failing
-#     assert_int_equal shows "lx != lx". Full newlib prints long long and floats (no
-#     -u _printf_float needed), at the cost of ~1 KB more RAM and ~15-20 KB more flash.
+#     integers (%llx, PRIu64), which the tests' and benchmarks' own messages use. (Unity prints
+#     its assertion values with its own routines, not printf.) Full newlib prints long long and
+#     floats (no -u _printf_float needed), at the cost of ~1 KB more RAM and ~15-20 KB more flash.
 #     Debian's newlib has no C99 printf formats either way (%zu %zd %jd %hhd print literally).
 #     Nano vs full cannot be mixed per target: the two use different newlib.h configurations
 #     (struct _reent layout), so the choice is made here, for the whole build;

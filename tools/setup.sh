@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # One-time (idempotent) set-up of a Debian 12 / Ubuntu machine for building and
-# testing the PMA firmware: Debian packages, the cmocka source for the ARM
-# builds (.deps/), and a Python virtual environment (.venv/) with the packages
-# of tools/requirements.txt. Run as root (or with sudo available).
+# testing the PMA firmware: Debian packages, the pinned third-party C sources
+# (Unity, ST cmsis_device_g4, Arm CMSIS_6: tools/fetch-deps.sh, into .deps/;
+# PMA_DEPS_MIRROR for machines without GitHub), and a Python virtual environment
+# (.venv/) with the packages of tools/requirements.txt. Run as root (or with sudo
+# available).
 # Called by tools/run-demo.sh and tools/run-tests.sh; safe to run again.
 set -euo pipefail
 
@@ -10,8 +12,7 @@ ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 say() { printf 'setup: %s\n' "$*"; }
 
 PACKAGES=(
-  cmake ninja-build gcc make pkg-config dpkg-dev     # host build
-  libcmocka-dev                                      # C unit tests (host)
+  cmake ninja-build gcc make pkg-config git         # host build; git for tools/fetch-deps.sh
   gcc-arm-none-eabi libnewlib-arm-none-eabi          # Cortex-M builds
   qemu-system-arm                                    # Cortex-M tests and benchmarks
   python3 python3-venv python3-pip                   # golden reference, reports
