@@ -3,8 +3,8 @@
  *
  * Every comparison is |got - expected| <= tol with a tolerance the caller computes and
  * documents; a NaN or infinite result never passes. On a mismatch the set, row, field,
- * expected, got and tolerance are printed (print_message) and the test fails at the end of
- * the set, after at most GOLDEN_MAX_REPORTS messages. Each set ends with one summary line:
+ * expected, got and tolerance are printed (printf) and the test fails at the end of the set,
+ * after at most GOLDEN_MAX_REPORTS messages. Each set ends with one summary line:
  *
  *   GOLDEN <module> <set> <variant> rows=<n> max_abs_u=<g> max_rel=<g> tol_use=<g>
  *
@@ -13,13 +13,18 @@
  * max_rel:   largest |got - expected| / (1 + |expected|) over every compared field;
  * tol_use:   largest |got - expected| / tol over every compared field (1 = at the limit).
  *
- * Memory: a golden_stats_t on the stack (about 60 bytes); nothing else. */
+ * Each (set, variant) is one Unity test named <set>_<variant> (golden_run_all below).
+ *
+ * Memory: a golden_stats_t on the stack (about 60 bytes), and one case and one name buffer
+ * (static); nothing else. */
 #ifndef GOLDEN_CHECK_H
 #define GOLDEN_CHECK_H
 
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
+
+#include "pma_test.h"
 
 #define GOLDEN_MAX_REPORTS 12u
 #define GOLDEN_LSB16 (1.0 / 65536.0)
@@ -53,8 +58,8 @@ static inline void golden_fail_msg(golden_stats_t *st, uint32_t row, const char 
 {
     st->failures++;
     if (st->failures <= GOLDEN_MAX_REPORTS) {
-        print_message("GOLDEN-MISMATCH %s %s %s row %u field %s: %s\n", st->module, st->set,
-                      st->variant, (unsigned)row, field, what);
+        printf("GOLDEN-MISMATCH %s %s %s row %u field %s: %s\n", st->module, st->set,
+               st->variant, (unsigned)row, field, what);
     }
 }
 
@@ -101,48 +106,55 @@ static inline double golden_q16_sat(double x)
     return x > GOLDEN_Q16_MAXV ? GOLDEN_Q16_MAXV : x < GOLDEN_Q16_MINV ? GOLDEN_Q16_MINV : x;
 }
 
-/* Summary line, then fail the test if anything mismatched. */
-static inline void golden_finish(golden_stats_t *st)
+/* The summary line of a set (see above). */
+static inline void golden_print_summary(const golden_stats_t *st)
 {
-    print_message("GOLDEN %s %s %s rows=%u max_abs_u=%.3g max_rel=%.3g tol_use=%.3g\n",
-                  st->module, st->set, st->variant, (unsigned)st->rows, st->max_abs_u,
-                  st->max_rel, st->tol_use);
-    if (st->failures != 0) {
-        fail_msg("%s %s %s: %u mismatching values (first %u shown above)", st->module, st->set,
-                 st->variant, (unsigned)st->failures,
-                 (unsigned)(st->failures < GOLDEN_MAX_REPORTS ? st->failures
-                                                              : GOLDEN_MAX_REPORTS));
-    }
+    printf("GOLDEN %s %s %s rows=%u max_abs_u=%.3g max_rel=%.3g tol_use=%.3g\n", st->module,
+           st->set, st->variant, (unsigned)st->rows, st->max_abs_u, st->max_rel, st->tol_use);
 }
 
-/* One cmocka test per (set, variant): the state names both. */
+/* Summary line, then fail the test if anything mismatched. A macro, so that Unity reports the
+ * failure at the line of the test file's call (Unity prints every failure with the name of
+ * the file that called UNITY_BEGIN). */
+#define golden_finish(st)                                                                 \
+    do {                                                                                  \
+        const golden_stats_t *const gst_ = (st);                                          \
+        golden_print_summary(gst_);                                                       \
+        if (gst_->failures != 0) {                                                        \
+            const unsigned shown_ = gst_->failures < GOLDEN_MAX_REPORTS                   \
+                                        ? (unsigned)gst_->failures                        \
+                                        : (unsigned)GOLDEN_MAX_REPORTS;                   \
+            pma_test_fail("%s %s %s: %u mismatching values (first %u shown above)",       \
+                          gst_->module, gst_->set, gst_->variant,                         \
+                          (unsigned)gst_->failures, shown_);                              \
+        }                                                                                 \
+    } while (0)
+
+/* One Unity test per (set, variant). The test function takes no argument: it reads the case
+ * it runs from golden_current, which golden_run_all sets before each run. */
 typedef struct golden_case {
     uint32_t set;
     golden_variant_t variant;
 } golden_case_t;
 
-/* Fill tests[] / cases[] / names[] for nsets sets x 2 variants; names come from
- * set_name(i). Returns the number of tests. */
+static golden_case_t golden_current;
+
+/* Run fn once per set and variant (nsets sets x 2 variants) as its own Unity test, named
+ * <set_name(i)>_f32 / _q16, between UNITY_BEGIN() and UNITY_END(); line: the caller's (what
+ * Unity reports for the test). */
 #define GOLDEN_NAME_LEN 48
-static inline size_t golden_register(struct CMUnitTest *tests, golden_case_t *cases,
-                              char (*names)[GOLDEN_NAME_LEN], uint32_t nsets,
-                              const char *(*set_name)(uint32_t), CMUnitTestFunction fn)
+static inline void golden_run_all(uint32_t nsets, const char *(*set_name)(uint32_t),
+                                  UnityTestFunction fn, int line)
 {
-    size_t n = 0;
+    static char name[GOLDEN_NAME_LEN];
     for (uint32_t i = 0; i < nsets; i++) {
         for (int v = 0; v < 2; v++) {
-            cases[n].set = i;
-            cases[n].variant = v == 0 ? GOLDEN_F32 : GOLDEN_Q16;
-            snprintf(names[n], GOLDEN_NAME_LEN, "%s_%s", set_name(i), v == 0 ? "f32" : "q16");
-            tests[n].name = names[n];
-            tests[n].test_func = fn;
-            tests[n].setup_func = NULL;
-            tests[n].teardown_func = NULL;
-            tests[n].initial_state = &cases[n];
-            n++;
+            golden_current.set = i;
+            golden_current.variant = v == 0 ? GOLDEN_F32 : GOLDEN_Q16;
+            snprintf(name, sizeof name, "%s_%s", set_name(i), v == 0 ? "f32" : "q16");
+            UnityDefaultTestRun(fn, name, line);
         }
     }
-    return n;
 }
 
 #endif /* GOLDEN_CHECK_H */

@@ -22,16 +22,12 @@
  * 4 LSB. Flags exact (the generator keeps |du| either 0 or > 1e-4, |phi| before the reset
  * rule > 5e-4 except in the designed rows, and the unclamped u more than 2 input units from
  * the limits). */
-#include <stdarg.h>
-#include <stddef.h>
-#include <setjmp.h>
-#include <stdint.h>
-#include <cmocka.h>
-
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 
 #include "pma/status.h"
+#include "pma_test.h"
 #include "golden.h"
 #include "golden_check.h"
 #include "vectors/mfac_vectors.h"
@@ -127,7 +123,7 @@ static void run(const golden_mfac_set_t *set, golden_variant_t variant)
     pma_mfac_f32_t sf;
     pma_mfac_q16_t sq;
     int rc = q16 ? pma_mfac_init_q16(&sq, &set->cfg) : pma_mfac_init_f32(&sf, &set->cfg);
-    assert_int_equal(rc, PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, rc);
     mfac_model_t m;
     model_init(&m, &set->cfg, q16);
     const double base_rel = q16 ? Q16_BASE_REL : F32_BASE_REL;
@@ -164,18 +160,15 @@ static void run(const golden_mfac_set_t *set, golden_variant_t variant)
     golden_finish(&st);
 }
 
-static void test_set(void **state)
+static void test_set(void)
 {
-    const golden_case_t *c = (const golden_case_t *)*state;
+    const golden_case_t *c = &golden_current;
     run(&GOLDEN_MFAC_SETS[c->set], c->variant);
 }
 
-static struct CMUnitTest tests[2 * GOLDEN_MFAC_NSETS];
-static golden_case_t cases[2 * GOLDEN_MFAC_NSETS];
-static char names[2 * GOLDEN_MFAC_NSETS][GOLDEN_NAME_LEN];
-
 int main(void)
 {
-    size_t n = golden_register(tests, cases, names, GOLDEN_MFAC_NSETS, set_name, test_set);
-    return _cmocka_run_group_tests("golden_mfac", tests, n, NULL, NULL);
+    UNITY_BEGIN();
+    golden_run_all(GOLDEN_MFAC_NSETS, set_name, test_set, __LINE__);
+    return UNITY_END();
 }

@@ -21,16 +21,12 @@
  * floor than the paper's controller, whose tan amplifies the Q16 quantisation.
  * Flags exact (the generator keeps the unclamped output more than 0.01 input units from
  * the limits). */
-#include <stdarg.h>
-#include <stddef.h>
-#include <setjmp.h>
-#include <stdint.h>
-#include <cmocka.h>
-
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 
 #include "pma/status.h"
+#include "pma_test.h"
 #include "golden.h"
 #include "golden_check.h"
 #include "vectors/pid_vectors.h"
@@ -99,7 +95,7 @@ static void run(const golden_pid_set_t *set, golden_variant_t variant)
     pma_pid_f32_t sf;
     pma_pid_q16_t sq;
     int rc = q16 ? pma_pid_init_q16(&sq, &set->cfg) : pma_pid_init_f32(&sf, &set->cfg);
-    assert_int_equal(rc, PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, rc);
     pid_model_t m = {0};
     m.rel = q16 ? Q16_REL : F32_REL;
     m.state_rel = q16 ? 0.0 : F32_STATE_REL;
@@ -134,18 +130,15 @@ static void run(const golden_pid_set_t *set, golden_variant_t variant)
     golden_finish(&st);
 }
 
-static void test_set(void **state)
+static void test_set(void)
 {
-    const golden_case_t *c = (const golden_case_t *)*state;
+    const golden_case_t *c = &golden_current;
     run(&GOLDEN_PID_SETS[c->set], c->variant);
 }
 
-static struct CMUnitTest tests[2 * GOLDEN_PID_NSETS];
-static golden_case_t cases[2 * GOLDEN_PID_NSETS];
-static char names[2 * GOLDEN_PID_NSETS][GOLDEN_NAME_LEN];
-
 int main(void)
 {
-    size_t n = golden_register(tests, cases, names, GOLDEN_PID_NSETS, set_name, test_set);
-    return _cmocka_run_group_tests("golden_pid", tests, n, NULL, NULL);
+    UNITY_BEGIN();
+    golden_run_all(GOLDEN_PID_NSETS, set_name, test_set, __LINE__);
+    return UNITY_END();
 }

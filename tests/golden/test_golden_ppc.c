@@ -30,16 +30,12 @@
  * least 4 propagated Q16 errors and 1e-4 relative away from its threshold, except the
  * deliberate exact rows). Rows with t = 0 must give u = u_ff exactly (bumpless start:
  * alpha = 0 makes lambda1 = lambda2 = 0 whatever the initial error). */
-#include <stdarg.h>
-#include <stddef.h>
-#include <setjmp.h>
-#include <stdint.h>
-#include <cmocka.h>
-
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 
 #include "pma/status.h"
+#include "pma_test.h"
 #include "golden.h"
 #include "golden_check.h"
 #include "vectors/ppc_vectors.h"
@@ -171,7 +167,7 @@ static void run_f32(const golden_ppc_set_t *set)
     golden_stats_init(&st, "ppc", set->name, GOLDEN_F32, set->n);
     pma_ppc_f32_t s;
     int rc = pma_ppc_init_f32(&s, &set->cfg);
-    assert_int_equal(rc, PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, rc);
     const double ff_k = (double)set->cfg.ff_gain_per_s * set->cfg.period_s;
     double tol_uff = F32_REL * fabs((double)set->cfg.ff_init);
     for (uint32_t k = 0; k < set->n; k++) {
@@ -202,11 +198,11 @@ static void run_q16(const golden_ppc_set_t *set)
     if (rc == PMA_ERR_FIXED_RANGE && ff_k >= 1.0) {
         /* "converted and range-checked at init": a per-step feedforward gain >= 1 may be
          * refused by the fixed-point variant (the u_ff clamp is unreachable below 1). */
-        print_message("GOLDEN-SKIP ppc %s q16: init refused ff_gain_per_s * period_s = %g "
-                      "(PMA_ERR_FIXED_RANGE)\n", set->name, ff_k);
+        printf("GOLDEN-SKIP ppc %s q16: init refused ff_gain_per_s * period_s = %g "
+               "(PMA_ERR_FIXED_RANGE)\n", set->name, ff_k);
         return;
     }
-    assert_int_equal(rc, PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, rc);
     const double u_extra = U_SPAN_FRAC_Q16 * ((double)set->cfg.u_max - set->cfg.u_min);
     double tol_uff = Q16_HALF_LSB;
     for (uint32_t k = 0; k < set->n; k++) {
@@ -231,9 +227,9 @@ static void run_q16(const golden_ppc_set_t *set)
     golden_finish(&st);
 }
 
-static void test_set(void **state)
+static void test_set(void)
 {
-    const golden_case_t *c = (const golden_case_t *)*state;
+    const golden_case_t *c = &golden_current;
     const golden_ppc_set_t *set = &GOLDEN_PPC_SETS[c->set];
     if (c->variant == GOLDEN_F32) {
         run_f32(set);
@@ -242,12 +238,9 @@ static void test_set(void **state)
     }
 }
 
-static struct CMUnitTest tests[2 * GOLDEN_PPC_NSETS];
-static golden_case_t cases[2 * GOLDEN_PPC_NSETS];
-static char names[2 * GOLDEN_PPC_NSETS][GOLDEN_NAME_LEN];
-
 int main(void)
 {
-    size_t n = golden_register(tests, cases, names, GOLDEN_PPC_NSETS, set_name, test_set);
-    return _cmocka_run_group_tests("golden_ppc", tests, n, NULL, NULL);
+    UNITY_BEGIN();
+    golden_run_all(GOLDEN_PPC_NSETS, set_name, test_set, __LINE__);
+    return UNITY_END();
 }

@@ -14,16 +14,12 @@
  *     rate x dt), and x_r' = (new - old)/dt divides the value's error by dt.
  *   Floors: float 1e-5 relative + 1e-6; Q16 1e-4 relative + 4 LSB (6.1e-5 cm, cm/s).
  * HOLD and STEP are exact in both variants (tolerance = the floor). */
-#include <stdarg.h>
-#include <stddef.h>
-#include <setjmp.h>
-#include <stdint.h>
-#include <cmocka.h>
-
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 
 #include "pma/status.h"
+#include "pma_test.h"
 #include "golden.h"
 #include "golden_check.h"
 #include "vectors/ref_vectors.h"
@@ -84,7 +80,7 @@ static void run(const golden_ref_set_t *set, golden_variant_t variant)
     pma_ref_f32_t sf;
     pma_ref_q16_t sq;
     int rc = q16 ? pma_ref_init_q16(&sq, &set->cfg) : pma_ref_init_f32(&sf, &set->cfg);
-    assert_int_equal(rc, PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, rc);
     const double base_rel = q16 ? Q16_BASE_REL : F32_BASE_REL;
     const double base_abs = q16 ? Q16_BASE_ABS : F32_BASE_ABS;
     double tol_stream = 0.0;   /* running error of the STREAM value */
@@ -147,18 +143,15 @@ static void run(const golden_ref_set_t *set, golden_variant_t variant)
     golden_finish(&st);
 }
 
-static void test_set(void **state)
+static void test_set(void)
 {
-    const golden_case_t *c = (const golden_case_t *)*state;
+    const golden_case_t *c = &golden_current;
     run(&GOLDEN_REF_SETS[c->set], c->variant);
 }
 
-static struct CMUnitTest tests[2 * GOLDEN_REF_NSETS];
-static golden_case_t cases[2 * GOLDEN_REF_NSETS];
-static char names[2 * GOLDEN_REF_NSETS][GOLDEN_NAME_LEN];
-
 int main(void)
 {
-    size_t n = golden_register(tests, cases, names, GOLDEN_REF_NSETS, set_name, test_set);
-    return _cmocka_run_group_tests("golden_ref", tests, n, NULL, NULL);
+    UNITY_BEGIN();
+    golden_run_all(GOLDEN_REF_NSETS, set_name, test_set, __LINE__);
+    return UNITY_END();
 }

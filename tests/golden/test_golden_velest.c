@@ -17,16 +17,12 @@
  *   tol = TOL_SAFETY * model + BASE_REL |v| + BASE_ABS
  * Floors: float 1e-5 relative + 1e-6 cm/s; Q16 1e-4 relative + 4 LSB (6.1e-5 cm/s).
  * The first sample primes the estimator and must give exactly 0. */
-#include <stdarg.h>
-#include <stddef.h>
-#include <setjmp.h>
-#include <stdint.h>
-#include <cmocka.h>
-
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 
 #include "pma/status.h"
+#include "pma_test.h"
 #include "golden.h"
 #include "golden_check.h"
 #include "vectors/velest_vectors.h"
@@ -83,7 +79,7 @@ static void run(const golden_velest_set_t *set, golden_variant_t variant)
     pma_velest_f32_t sf;
     pma_velest_q16_t sq;
     int rc = q16 ? pma_velest_init_q16(&sq, &set->cfg) : pma_velest_init_f32(&sf, &set->cfg);
-    assert_int_equal(rc, PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, rc);
 
     /* largest magnitudes over the set, for the per-step injected errors */
     const double T = set->cfg.period_s;
@@ -136,18 +132,15 @@ static void run(const golden_velest_set_t *set, golden_variant_t variant)
     golden_finish(&st);
 }
 
-static void test_set(void **state)
+static void test_set(void)
 {
-    const golden_case_t *c = (const golden_case_t *)*state;
+    const golden_case_t *c = &golden_current;
     run(&GOLDEN_VELEST_SETS[c->set], c->variant);
 }
 
-static struct CMUnitTest tests[2 * GOLDEN_VELEST_NSETS];
-static golden_case_t cases[2 * GOLDEN_VELEST_NSETS];
-static char names[2 * GOLDEN_VELEST_NSETS][GOLDEN_NAME_LEN];
-
 int main(void)
 {
-    size_t n = golden_register(tests, cases, names, GOLDEN_VELEST_NSETS, set_name, test_set);
-    return _cmocka_run_group_tests("golden_velest", tests, n, NULL, NULL);
+    UNITY_BEGIN();
+    golden_run_all(GOLDEN_VELEST_NSETS, set_name, test_set, __LINE__);
+    return UNITY_END();
 }

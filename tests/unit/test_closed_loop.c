@@ -62,11 +62,11 @@ static result_t run(float t_u, float w1, int fixed)
     pma_velest_f32_t vf;
     pma_velest_q16_t vq;
     pma_ref_f32_t rf;
-    assert_int_equal(pma_ppc_init_f32(&pf, &c), PMA_OK);
-    assert_int_equal(pma_ppc_init_q16(&pq, &c), PMA_OK);
-    assert_int_equal(pma_velest_init_f32(&vf, &vc), PMA_OK);
-    assert_int_equal(pma_velest_init_q16(&vq, &vc), PMA_OK);
-    assert_int_equal(pma_ref_init_f32(&rf, &rc), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_f32(&pf, &c));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_q16(&pq, &c));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_velest_init_f32(&vf, &vc));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_velest_init_q16(&vq, &vc));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ref_init_f32(&rf, &rc));
     plant_t p = {.x = -0.5, .v = 0.0, .l = 0.0, .b = 0.05, .f = 2.0, .D = 30.0, .G = 20.0};
     uint32_t seed = 7u;
     result_t r = {.max_e_after_tu = 0.0, .entry_time = -1.0, .min_x = p.x, .max_x = p.x};
@@ -75,18 +75,18 @@ static result_t run(float t_u, float w1, int fixed)
         const double t = k * T;
         const float xm = (float)(p.x + 0.0005 * test_rand_gauss(&seed));   /* 5 um noise */
         float xr, u;
-        assert_int_equal(pma_ref_eval_f32(&rf, (float)t, &xr, NULL), PMA_OK);
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ref_eval_f32(&rf, (float)t, &xr, NULL));
         uint32_t flags;
         if (fixed) {
             pma_q16_t v, uq;
-            assert_int_equal(pma_velest_step_q16(&vq, Q16(xm), &v), PMA_OK);
-            assert_int_equal(pma_ppc_step_q16(&pq, Q16(t), Q16(xm), v, Q16(xr), &uq), PMA_OK);
+            TEST_ASSERT_EQUAL_INT(PMA_OK, pma_velest_step_q16(&vq, Q16(xm), &v));
+            TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_q16(&pq, Q16(t), Q16(xm), v, Q16(xr), &uq));
             u = (float)F16(uq);
             flags = pq.out.flags;
         } else {
             float v;
-            assert_int_equal(pma_velest_step_f32(&vf, xm, &v), PMA_OK);
-            assert_int_equal(pma_ppc_step_f32(&pf, (float)t, xm, v, xr, &u), PMA_OK);
+            TEST_ASSERT_EQUAL_INT(PMA_OK, pma_velest_step_f32(&vf, xm, &v));
+            TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_f32(&pf, (float)t, xm, v, xr, &u));
             flags = pf.out.flags;
         }
         const double e = p.x - xr;
@@ -100,32 +100,31 @@ static result_t run(float t_u, float w1, int fixed)
         r.min_x = fmin(r.min_x, p.x);
         r.max_x = fmax(r.max_x, p.x);
     }
-    print_message("%s t_u=%.0f w1=%.1f: in band from t=%.3f s, max|e| after t_u %.4f cm, "
-                  "x in [%.3f, %.3f] cm, barrier steps after t_u %lu\n",
-                  fixed ? "q16" : "f32", t_u, w1, r.entry_time, r.max_e_after_tu, r.min_x, r.max_x,
-                  (unsigned long)r.breaches_after_tu);
+    printf("%s t_u=%.0f w1=%.1f: in band from t=%.3f s, max|e| after t_u %.4f cm, "
+           "x in [%.3f, %.3f] cm, barrier steps after t_u %lu\n",
+           fixed ? "q16" : "f32", t_u, w1, r.entry_time, r.max_e_after_tu, r.min_x, r.max_x,
+           (unsigned long)r.breaches_after_tu);
     return r;
 }
 
 static void check(result_t r, float t_u, float w1)
 {
-    assert_true(r.entry_time >= 0.0 && r.entry_time <= t_u);
-    assert_true(r.max_e_after_tu < w1);
-    assert_true(r.min_x > -3.0 && r.max_x < 0.0);
+    TEST_ASSERT_TRUE(r.entry_time >= 0.0 && r.entry_time <= t_u);
+    TEST_ASSERT_LESS_THAN_DOUBLE(w1, r.max_e_after_tu);
+    TEST_ASSERT_TRUE(r.min_x > -3.0 && r.max_x < 0.0);
 }
 
-static void test_case1_float(void **state) { (void)state; check(run(6.0f, 0.5f, 0), 6.0f, 0.5f); }
-static void test_case1_fixed(void **state) { (void)state; check(run(6.0f, 0.5f, 1), 6.0f, 0.5f); }
-static void test_case2b_float(void **state) { (void)state; check(run(2.0f, 0.3f, 0), 2.0f, 0.3f); }
-static void test_case2b_fixed(void **state) { (void)state; check(run(2.0f, 0.3f, 1), 2.0f, 0.3f); }
+static void test_case1_float(void) { check(run(6.0f, 0.5f, 0), 6.0f, 0.5f); }
+static void test_case1_fixed(void) { check(run(6.0f, 0.5f, 1), 6.0f, 0.5f); }
+static void test_case2b_float(void) { check(run(2.0f, 0.3f, 0), 2.0f, 0.3f); }
+static void test_case2b_fixed(void) { check(run(2.0f, 0.3f, 1), 2.0f, 0.3f); }
 
 int main(void)
 {
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_case1_float),
-        cmocka_unit_test(test_case1_fixed),
-        cmocka_unit_test(test_case2b_float),
-        cmocka_unit_test(test_case2b_fixed),
-    };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    UNITY_BEGIN();
+    RUN_TEST(test_case1_float);
+    RUN_TEST(test_case1_fixed);
+    RUN_TEST(test_case2b_float);
+    RUN_TEST(test_case2b_fixed);
+    return UNITY_END();
 }

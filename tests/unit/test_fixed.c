@@ -4,69 +4,64 @@
 
 #define PI 3.14159265358979323846
 
-static void test_sadd_ssub_saturate(void **state)
+static void test_sadd_ssub_saturate(void)
 {
-    (void)state;
-    assert_int_equal(pma_q16_sadd(PMA_Q16_MAX, 1), PMA_Q16_MAX);
-    assert_int_equal(pma_q16_sadd(PMA_Q16_MIN, -1), PMA_Q16_MIN);
-    assert_int_equal(pma_q16_sadd(PMA_Q16_MAX, PMA_Q16_MIN), -1);
-    assert_int_equal(pma_q16_sadd(Q16(1.5), Q16(2.25)), Q16(3.75));
-    assert_int_equal(pma_q16_ssub(PMA_Q16_MIN, 1), PMA_Q16_MIN);
-    assert_int_equal(pma_q16_ssub(PMA_Q16_MAX, -1), PMA_Q16_MAX);
-    assert_int_equal(pma_q16_ssub(0, PMA_Q16_MIN), PMA_Q16_MAX);
-    assert_int_equal(pma_q16_ssub(-1, PMA_Q16_MAX), PMA_Q16_MIN);
-    assert_int_equal(pma_q16_ssub(Q16(1.0), Q16(3.5)), Q16(-2.5));
-    assert_int_equal(pma_q16_sneg(PMA_Q16_MIN), PMA_Q16_MAX);
-    assert_int_equal(pma_q16_sneg(Q16(2.0)), Q16(-2.0));
+    TEST_ASSERT_EQUAL_INT(PMA_Q16_MAX, pma_q16_sadd(PMA_Q16_MAX, 1));
+    TEST_ASSERT_EQUAL_INT(PMA_Q16_MIN, pma_q16_sadd(PMA_Q16_MIN, -1));
+    TEST_ASSERT_EQUAL_INT(-1, pma_q16_sadd(PMA_Q16_MAX, PMA_Q16_MIN));
+    TEST_ASSERT_EQUAL_INT(Q16(3.75), pma_q16_sadd(Q16(1.5), Q16(2.25)));
+    TEST_ASSERT_EQUAL_INT(PMA_Q16_MIN, pma_q16_ssub(PMA_Q16_MIN, 1));
+    TEST_ASSERT_EQUAL_INT(PMA_Q16_MAX, pma_q16_ssub(PMA_Q16_MAX, -1));
+    TEST_ASSERT_EQUAL_INT(PMA_Q16_MAX, pma_q16_ssub(0, PMA_Q16_MIN));
+    TEST_ASSERT_EQUAL_INT(PMA_Q16_MIN, pma_q16_ssub(-1, PMA_Q16_MAX));
+    TEST_ASSERT_EQUAL_INT(Q16(-2.5), pma_q16_ssub(Q16(1.0), Q16(3.5)));
+    TEST_ASSERT_EQUAL_INT(PMA_Q16_MAX, pma_q16_sneg(PMA_Q16_MIN));
+    TEST_ASSERT_EQUAL_INT(Q16(-2.0), pma_q16_sneg(Q16(2.0)));
 }
 
-static void test_smul_rounds_and_saturates(void **state)
+static void test_smul_rounds_and_saturates(void)
 {
-    (void)state;
-    assert_int_equal(pma_q16_smul(Q16(1.5), Q16(-2.0)), Q16(-3.0));
-    assert_int_equal(pma_q16_smul(Q16(300.0), Q16(300.0)), PMA_Q16_MAX);
-    assert_int_equal(pma_q16_smul(Q16(-300.0), Q16(300.0)), PMA_Q16_MIN);
+    TEST_ASSERT_EQUAL_INT(Q16(-3.0), pma_q16_smul(Q16(1.5), Q16(-2.0)));
+    TEST_ASSERT_EQUAL_INT(PMA_Q16_MAX, pma_q16_smul(Q16(300.0), Q16(300.0)));
+    TEST_ASSERT_EQUAL_INT(PMA_Q16_MIN, pma_q16_smul(Q16(-300.0), Q16(300.0)));
     /* 1 LSB x 0.5 = half an LSB: ties round away from zero, symmetric in sign */
-    assert_int_equal(pma_q16_smul(1, Q16(0.5)), 1);
-    assert_int_equal(pma_q16_smul(-1, Q16(0.5)), -1);
-    assert_int_equal(pma_q16_smul(1, Q16(0.25)), 0);
-    assert_int_equal(pma_q16_smul_q30(Q16(3.0), PMA_Q30_ONE / 2), Q16(1.5));
-    assert_int_equal(pma_q16_smul_q30(PMA_Q16_MAX, -2 * PMA_Q30_ONE), PMA_Q16_MIN);
+    TEST_ASSERT_EQUAL_INT(1, pma_q16_smul(1, Q16(0.5)));
+    TEST_ASSERT_EQUAL_INT(-1, pma_q16_smul(-1, Q16(0.5)));
+    TEST_ASSERT_EQUAL_INT(0, pma_q16_smul(1, Q16(0.25)));
+    TEST_ASSERT_EQUAL_INT(Q16(1.5), pma_q16_smul_q30(Q16(3.0), PMA_Q30_ONE / 2));
+    TEST_ASSERT_EQUAL_INT(PMA_Q16_MIN, pma_q16_smul_q30(PMA_Q16_MAX, -2 * PMA_Q30_ONE));
 }
 
-static void test_sdiv(void **state)
+static void test_sdiv(void)
 {
-    (void)state;
-    assert_int_equal(pma_q16_sdiv(Q16(3.0), Q16(2.0)), Q16(1.5));
-    assert_int_equal(pma_q16_sdiv(Q16(-3.0), Q16(2.0)), Q16(-1.5));
-    assert_int_equal(pma_q16_sdiv(Q16(1.0), Q16(3.0)), 21845);      /* 0.333328, rounded */
-    assert_int_equal(pma_q16_sdiv(Q16(-1.0), Q16(3.0)), -21845);
-    assert_int_equal(pma_q16_sdiv(Q16(1000.0), Q16(0.001)), PMA_Q16_MAX);
-    assert_int_equal(pma_q16_sdiv(Q16(-1000.0), Q16(0.001)), PMA_Q16_MIN);
-    assert_int_equal(pma_q16_sdiv(Q16(5.0), 0), PMA_Q16_MAX);
-    assert_int_equal(pma_q16_sdiv(Q16(-5.0), 0), PMA_Q16_MIN);
-    assert_int_equal(pma_q16_sdiv(0, 0), 0);
-    assert_int_equal(pma_q16_sdiv(PMA_Q16_MIN, -PMA_Q16_ONE), PMA_Q16_MAX);
+    TEST_ASSERT_EQUAL_INT(Q16(1.5), pma_q16_sdiv(Q16(3.0), Q16(2.0)));
+    TEST_ASSERT_EQUAL_INT(Q16(-1.5), pma_q16_sdiv(Q16(-3.0), Q16(2.0)));
+    TEST_ASSERT_EQUAL_INT(21845, pma_q16_sdiv(Q16(1.0), Q16(3.0)));      /* 0.333328, rounded */
+    TEST_ASSERT_EQUAL_INT(-21845, pma_q16_sdiv(Q16(-1.0), Q16(3.0)));
+    TEST_ASSERT_EQUAL_INT(PMA_Q16_MAX, pma_q16_sdiv(Q16(1000.0), Q16(0.001)));
+    TEST_ASSERT_EQUAL_INT(PMA_Q16_MIN, pma_q16_sdiv(Q16(-1000.0), Q16(0.001)));
+    TEST_ASSERT_EQUAL_INT(PMA_Q16_MAX, pma_q16_sdiv(Q16(5.0), 0));
+    TEST_ASSERT_EQUAL_INT(PMA_Q16_MIN, pma_q16_sdiv(Q16(-5.0), 0));
+    TEST_ASSERT_EQUAL_INT(0, pma_q16_sdiv(0, 0));
+    TEST_ASSERT_EQUAL_INT(PMA_Q16_MAX, pma_q16_sdiv(PMA_Q16_MIN, -PMA_Q16_ONE));
 }
 
-static void test_conversions(void **state)
+static void test_conversions(void)
 {
-    (void)state;
-    assert_int_equal(pma_q16_from_f32(NAN), 0);
-    assert_int_equal(pma_q16_from_f32(INFINITY), PMA_Q16_MAX);
-    assert_int_equal(pma_q16_from_f32(-INFINITY), PMA_Q16_MIN);
-    assert_int_equal(pma_q16_from_f32(1e9f), PMA_Q16_MAX);
-    assert_int_equal(pma_q16_from_f32(-2.5f), -163840);
+    TEST_ASSERT_EQUAL_INT(0, pma_q16_from_f32(NAN));
+    TEST_ASSERT_EQUAL_INT(PMA_Q16_MAX, pma_q16_from_f32(INFINITY));
+    TEST_ASSERT_EQUAL_INT(PMA_Q16_MIN, pma_q16_from_f32(-INFINITY));
+    TEST_ASSERT_EQUAL_INT(PMA_Q16_MAX, pma_q16_from_f32(1e9f));
+    TEST_ASSERT_EQUAL_INT(-163840, pma_q16_from_f32(-2.5f));
     assert_near(pma_q16_to_f32(Q16(-2.0)), -2.0, 0.0);
-    assert_int_equal(pma_q16_clamp(Q16(5.0), Q16(-1.0), Q16(1.0)), Q16(1.0));
-    assert_int_equal(pma_q16_sat64((int64_t)1 << 40), PMA_Q16_MAX);
+    TEST_ASSERT_EQUAL_INT(Q16(1.0), pma_q16_clamp(Q16(5.0), Q16(-1.0), Q16(1.0)));
+    TEST_ASSERT_EQUAL_INT(PMA_Q16_MAX, pma_q16_sat64((int64_t)1 << 40));
 }
 
 /* tan(pi r / 2): error <= 1 LSB + |tan| (2e-6 + 2^-31 / (1 - r^2)) over the
  * whole open interval (grid dense near the pole), odd, saturating. */
-static void test_tan_halfpi_accuracy(void **state)
+static void test_tan_halfpi_accuracy(void)
 {
-    (void)state;
     double worst = 0.0;
     for (int i = -4000; i <= 4000; ++i) {
         /* r = sign * (1 - 10^(-k)) spacing near the pole, linear elsewhere */
@@ -81,40 +76,37 @@ static void test_tan_halfpi_accuracy(void **state)
         const double bound = 1.0 / 65536.0 + fabs(exact) * (2e-6 + 0x1p-31 / (1.0 - rr * rr));
         const double err = fabs(got - exact) / bound;
         if (err > worst) worst = err;
-        assert_int_equal(pma_q16_tan_halfpi(-rq), -pma_q16_tan_halfpi(rq));
+        TEST_ASSERT_EQUAL_INT(-pma_q16_tan_halfpi(rq), pma_q16_tan_halfpi(-rq));
     }
-    print_message("tan_halfpi: worst error / stated bound = %.3f\n", worst);
-    assert_true(worst <= 1.0);
-    assert_int_equal(pma_q16_tan_halfpi(0), 0);
-    assert_int_equal(pma_q16_tan_halfpi(PMA_Q30_ONE / 2), PMA_Q16_ONE);   /* tan(pi/4) = 1 */
-    assert_int_equal(pma_q16_tan_halfpi(PMA_Q30_ONE), PMA_Q16_MAX);
-    assert_int_equal(pma_q16_tan_halfpi(-PMA_Q30_ONE), -PMA_Q16_MAX);   /* symmetric */
-    assert_int_equal(pma_q16_tan_halfpi(PMA_Q30_ONE + 5), PMA_Q16_MAX);
-    assert_int_equal(pma_q16_tan_halfpi(PMA_Q30_ONE - 1), PMA_Q16_MAX);  /* 6.8e8 > range */
+    printf("tan_halfpi: worst error / stated bound = %.3f\n", worst);
+    TEST_ASSERT_TRUE(worst <= 1.0);
+    TEST_ASSERT_EQUAL_INT(0, pma_q16_tan_halfpi(0));
+    TEST_ASSERT_EQUAL_INT(PMA_Q16_ONE, pma_q16_tan_halfpi(PMA_Q30_ONE / 2));  /* tan(pi/4) = 1 */
+    TEST_ASSERT_EQUAL_INT(PMA_Q16_MAX, pma_q16_tan_halfpi(PMA_Q30_ONE));
+    TEST_ASSERT_EQUAL_INT(-PMA_Q16_MAX, pma_q16_tan_halfpi(-PMA_Q30_ONE));  /* symmetric */
+    TEST_ASSERT_EQUAL_INT(PMA_Q16_MAX, pma_q16_tan_halfpi(PMA_Q30_ONE + 5));
+    TEST_ASSERT_EQUAL_INT(PMA_Q16_MAX, pma_q16_tan_halfpi(PMA_Q30_ONE - 1));  /* 6.8e8 > range */
 }
 
 /* Monotone over a dense grid of the whole interval, exact at integers: a
  * dropped carry in the fraction division once returned 1.0 instead of 2.0
  * at r = 756808056 / 2^30 (tan = 1.99999...); every core must also give the
  * same, exactly rounded result, checked here against a 64-bit division. */
-static void test_tan_halfpi_monotone_exact(void **state)
+static void test_tan_halfpi_monotone_exact(void)
 {
-    (void)state;
-    assert_int_equal(pma_q16_tan_halfpi(756808056), 2 * PMA_Q16_ONE);
+    TEST_ASSERT_EQUAL_INT(2 * PMA_Q16_ONE, pma_q16_tan_halfpi(756808056));
     pma_q16_t prev = 0;
     for (int32_t r = 1; r < PMA_Q30_ONE; r += 4099) {            /* 262,000 points */
         const pma_q16_t t = pma_q16_tan_halfpi(r);
         if (t < prev) {
-            print_error("tan not monotone at r = %ld: %ld < %ld\n", (long)r, (long)t, (long)prev);
-            fail();
+            pma_test_fail("tan not monotone at r = %ld: %ld < %ld", (long)r, (long)t, (long)prev);
         }
         prev = t;
     }
 }
 
-static void test_cos_sin_accuracy(void **state)
+static void test_cos_sin_accuracy(void)
 {
-    (void)state;
     double worst_cos = 0.0, worst_sin = 0.0;
     for (int i = -20000; i < 20000; ++i) {
         const pma_q30_t sq = (pma_q30_t)((int64_t)i * 107374 + 12345);   /* s in [-2, 2) */
@@ -128,11 +120,11 @@ static void test_cos_sin_accuracy(void **state)
         const double err = fabs(pma_q30_sin_2pi_frac32(f) / 1073741824.0 - exact);
         if (err > worst_sin) worst_sin = err;
     }
-    print_message("cos_pi max error %.3g, sin_2pi max error %.3g\n", worst_cos, worst_sin);
-    assert_true(worst_cos < 1e-7);
-    assert_true(worst_sin < 1e-7);
-    assert_int_equal(pma_q30_cos_pi(0), PMA_Q30_ONE);           /* alpha(0) = 0 exactly */
-    assert_int_equal(pma_q30_cos_pi(PMA_Q30_ONE), -PMA_Q30_ONE);
+    printf("cos_pi max error %.3g, sin_2pi max error %.3g\n", worst_cos, worst_sin);
+    TEST_ASSERT_LESS_THAN_DOUBLE(1e-7, worst_cos);
+    TEST_ASSERT_LESS_THAN_DOUBLE(1e-7, worst_sin);
+    TEST_ASSERT_EQUAL_INT(PMA_Q30_ONE, pma_q30_cos_pi(0));      /* alpha(0) = 0 exactly */
+    TEST_ASSERT_EQUAL_INT(-PMA_Q30_ONE, pma_q30_cos_pi(PMA_Q30_ONE));
     assert_near(pma_q30_sin_2pi_frac32(0) / 1073741824.0, 0.0, 1e-7);
     assert_near(pma_q30_sin_2pi_frac32(0x40000000u) / 1073741824.0, 1.0, 1e-7);
     assert_near(pma_q30_sin_2pi_frac32(0xC0000000u) / 1073741824.0, -1.0, 1e-7);
@@ -140,14 +132,13 @@ static void test_cos_sin_accuracy(void **state)
 
 int main(void)
 {
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_sadd_ssub_saturate),
-        cmocka_unit_test(test_smul_rounds_and_saturates),
-        cmocka_unit_test(test_sdiv),
-        cmocka_unit_test(test_conversions),
-        cmocka_unit_test(test_tan_halfpi_accuracy),
-        cmocka_unit_test(test_tan_halfpi_monotone_exact),
-        cmocka_unit_test(test_cos_sin_accuracy),
-    };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    UNITY_BEGIN();
+    RUN_TEST(test_sadd_ssub_saturate);
+    RUN_TEST(test_smul_rounds_and_saturates);
+    RUN_TEST(test_sdiv);
+    RUN_TEST(test_conversions);
+    RUN_TEST(test_tan_halfpi_accuracy);
+    RUN_TEST(test_tan_halfpi_monotone_exact);
+    RUN_TEST(test_cos_sin_accuracy);
+    return UNITY_END();
 }

@@ -12,102 +12,98 @@ static pma_mfac_config_t paper(void)
 }
 
 /* Step 0: du = 0 -> reset to phi(1); u = u_init + rho phi1/(lambda + phi1^2) (y* - y). */
-static void test_first_step(void **state)
+static void test_first_step(void)
 {
-    (void)state;
     pma_mfac_config_t c = paper();
     c.u_init = 5.0f;
     pma_mfac_f32_t m;
-    assert_int_equal(pma_mfac_init_f32(&m, &c), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_init_f32(&m, &c));
     float u;
-    assert_int_equal(pma_mfac_step_f32(&m, -2.0f, -1.99f, &u), PMA_OK);
-    assert_true(m.flags & PMA_MFAC_FLAG_RESET);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_step_f32(&m, -2.0f, -1.99f, &u));
+    TEST_ASSERT_TRUE(m.flags & PMA_MFAC_FLAG_RESET);
     assert_near(m.phi, 0.5, 0.0);
     assert_near(u, 5.0 + 31.7 * 0.5 / (0.03 + 0.25) * 0.01, 1e-4);
-    assert_int_equal(m.resets, 1);
+    TEST_ASSERT_EQUAL_INT(1, m.resets);
 }
 
 /* Drive the estimator to a chosen state, then check each reset condition
  * alone: |du| <= eps, |phi| <= eps, sign(phi) != sign(phi1). */
-static void test_reset_conditions(void **state)
+static void test_reset_conditions(void)
 {
-    (void)state;
     pma_mfac_config_t c = paper();
     pma_mfac_f32_t m;
     float u;
-    assert_int_equal(pma_mfac_init_f32(&m, &c), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_init_f32(&m, &c));
 
     /* no reset: du != 0, dy consistent with a positive gain */
     m.k = 1; m.phi = 0.4f; m.u1 = 2.0f; m.u2 = 1.0f; m.y1 = -2.0f;
-    assert_int_equal(pma_mfac_step_f32(&m, -1.6f, -1.6f, &u), PMA_OK);
-    assert_int_equal(m.flags & PMA_MFAC_FLAG_RESET, 0);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_step_f32(&m, -1.6f, -1.6f, &u));
+    TEST_ASSERT_EQUAL_HEX32(0, m.flags & PMA_MFAC_FLAG_RESET);
     /* phi = 0.4 + 0.5*1/(1.9+1)*(0.4 - 0.4) = 0.4 */
     assert_near(m.phi, 0.4, 1e-6);
 
     /* |du| <= eps: reset */
     m.k = 1; m.phi = 0.4f; m.u1 = 2.0f; m.u2 = 2.0f + 0.5e-5f; m.y1 = -2.0f;
-    assert_int_equal(pma_mfac_step_f32(&m, -1.9f, -1.9f, &u), PMA_OK);
-    assert_true(m.flags & PMA_MFAC_FLAG_RESET);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_step_f32(&m, -1.9f, -1.9f, &u));
+    TEST_ASSERT_TRUE(m.flags & PMA_MFAC_FLAG_RESET);
     assert_near(m.phi, c.phi1, 0.0);
 
     /* sign flip: output moved against the input -> phi would turn negative */
     m.k = 1; m.phi = 0.1f; m.u1 = 2.0f; m.u2 = 1.0f; m.y1 = -2.0f;
-    assert_int_equal(pma_mfac_step_f32(&m, -3.0f, -3.0f, &u), PMA_OK);
-    assert_true(m.flags & PMA_MFAC_FLAG_RESET);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_step_f32(&m, -3.0f, -3.0f, &u));
+    TEST_ASSERT_TRUE(m.flags & PMA_MFAC_FLAG_RESET);
     assert_near(m.phi, c.phi1, 0.0);
 
     /* |phi| <= eps without a sign flip: phi lands on ~0 (+) */
     c.eps = 1e-3f;
-    assert_int_equal(pma_mfac_init_f32(&m, &c), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_init_f32(&m, &c));
     /* phi = 0.1 + 0.5/(2.9) (dy - 0.1) = 0.0005 when dy = 0.1 - 0.0995*2.9/0.5 */
     const float dy = 0.1f - (0.1f - 0.0005f) * 2.9f / 0.5f;
     m.k = 1; m.phi = 0.1f; m.u1 = 2.0f; m.u2 = 1.0f; m.y1 = -2.0f;
-    assert_int_equal(pma_mfac_step_f32(&m, -2.0f + dy, -2.0f, &u), PMA_OK);
-    assert_true(m.flags & PMA_MFAC_FLAG_RESET);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_step_f32(&m, -2.0f + dy, -2.0f, &u));
+    TEST_ASSERT_TRUE(m.flags & PMA_MFAC_FLAG_RESET);
     assert_near(m.phi, c.phi1, 0.0);
 }
 
-static void test_limits(void **state)
+static void test_limits(void)
 {
-    (void)state;
     pma_mfac_config_t c = paper();
     pma_mfac_f32_t m;
     pma_mfac_q16_t q;
-    assert_int_equal(pma_mfac_init_f32(&m, &c), PMA_OK);
-    assert_int_equal(pma_mfac_init_q16(&q, &c), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_init_f32(&m, &c));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_init_q16(&q, &c));
     float u;
     pma_q16_t uq;
     /* a large error saturates high, and the clamped value is the one remembered */
-    assert_int_equal(pma_mfac_step_f32(&m, -2.0f, 10.0f, &u), PMA_OK);
-    assert_true(u == c.u_max && (m.flags & PMA_MFAC_FLAG_SAT_HIGH));
-    assert_true(m.u1 == c.u_max);
-    assert_int_equal(pma_mfac_step_q16(&q, Q16(-2.0), Q16(10.0), &uq), PMA_OK);
-    assert_int_equal(uq, Q16(c.u_max));
-    assert_true(q.flags & PMA_MFAC_FLAG_SAT_HIGH);
-    assert_int_equal(pma_mfac_step_f32(&m, -2.0f, -20.0f, &u), PMA_OK);
-    assert_true(u == c.u_min && (m.flags & PMA_MFAC_FLAG_SAT_LOW));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_step_f32(&m, -2.0f, 10.0f, &u));
+    TEST_ASSERT_TRUE(u == c.u_max && (m.flags & PMA_MFAC_FLAG_SAT_HIGH));
+    TEST_ASSERT_TRUE(m.u1 == c.u_max);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_step_q16(&q, Q16(-2.0), Q16(10.0), &uq));
+    TEST_ASSERT_EQUAL_INT(Q16(c.u_max), uq);
+    TEST_ASSERT_TRUE(q.flags & PMA_MFAC_FLAG_SAT_HIGH);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_step_f32(&m, -2.0f, -20.0f, &u));
+    TEST_ASSERT_TRUE(u == c.u_min && (m.flags & PMA_MFAC_FLAG_SAT_LOW));
     /* NaN: error, nothing changes */
     const pma_mfac_f32_t before = m;
-    assert_int_equal(pma_mfac_step_f32(&m, NAN, -2.0f, &u), PMA_ERR_NOT_FINITE);
-    assert_int_equal(pma_mfac_step_f32(&m, -2.0f, INFINITY, &u), PMA_ERR_NOT_FINITE);
-    assert_memory_equal(&before, &m, sizeof m);
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_NOT_FINITE, pma_mfac_step_f32(&m, NAN, -2.0f, &u));
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_NOT_FINITE, pma_mfac_step_f32(&m, -2.0f, INFINITY, &u));
+    TEST_ASSERT_EQUAL_MEMORY(&before, &m, sizeof m);
 }
 
-static void test_invalid_config(void **state)
+static void test_invalid_config(void)
 {
-    (void)state;
     pma_mfac_config_t c;
     pma_mfac_f32_t m;
     pma_mfac_q16_t q;
 #define BAD(field, value, code)                                                   \
     do {                                                                          \
         c = paper();                                                              \
-        assert_int_equal(pma_mfac_init_f32(&m, &c), PMA_OK);                      \
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_init_f32(&m, &c));                 \
         c.field = (value);                                                        \
-        assert_int_equal(pma_mfac_init_f32(&m, &c), code);                        \
-        assert_int_equal(pma_mfac_init_q16(&q, &c), code);                        \
+        TEST_ASSERT_EQUAL_INT(code, pma_mfac_init_f32(&m, &c));                   \
+        TEST_ASSERT_EQUAL_INT(code, pma_mfac_init_q16(&q, &c));                   \
         float u_;                                                                 \
-        assert_int_equal(pma_mfac_step_f32(&m, 0.0f, 0.0f, &u_), PMA_ERR_NOT_READY); \
+        TEST_ASSERT_EQUAL_INT(PMA_ERR_NOT_READY, pma_mfac_step_f32(&m, 0.0f, 0.0f, &u_)); \
     } while (0)
     BAD(eta, 0.0f, PMA_ERR_RANGE);
     BAD(eta, 2.5f, PMA_ERR_RANGE);
@@ -124,28 +120,27 @@ static void test_invalid_config(void **state)
 #undef BAD
     c = paper();
     c.u_max = 1e6f;
-    assert_int_equal(pma_mfac_init_f32(&m, &c), PMA_OK);
-    assert_int_equal(pma_mfac_init_q16(&q, &c), PMA_ERR_FIXED_RANGE);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_init_f32(&m, &c));
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_FIXED_RANGE, pma_mfac_init_q16(&q, &c));
 }
 
 /* Closed loop on a first-order plant: float and fixed point stay together
  * and both track a slow sine. */
-static void test_closed_loop_fixed_matches_float(void **state)
+static void test_closed_loop_fixed_matches_float(void)
 {
-    (void)state;
     pma_mfac_config_t c = paper();
     pma_mfac_f32_t m;
     pma_mfac_q16_t q;
-    assert_int_equal(pma_mfac_init_f32(&m, &c), PMA_OK);
-    assert_int_equal(pma_mfac_init_q16(&q, &c), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_init_f32(&m, &c));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_init_q16(&q, &c));
     double yf = -2.0, yq = -2.0, worst_u = 0.0, worst_e = 0.0;
     for (int k = 0; k < 3000; ++k) {
         const double t = k * 0.01;
         const double ref_next = -2.0 + 0.3 * sin(0.5 * (t + 0.01));
         float u;
         pma_q16_t uq;
-        assert_int_equal(pma_mfac_step_f32(&m, (float)yf, (float)ref_next, &u), PMA_OK);
-        assert_int_equal(pma_mfac_step_q16(&q, Q16(yq), Q16(ref_next), &uq), PMA_OK);
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_step_f32(&m, (float)yf, (float)ref_next, &u));
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_step_q16(&q, Q16(yq), Q16(ref_next), &uq));
         /* plant: y(k+1) = 0.9 y(k) + 0.004 u(k) - 0.2 (equilibrium at u = 0: y = -2) */
         yf = 0.9 * yf + 0.004 * u - 0.2;
         yq = 0.9 * yq + 0.004 * F16(uq) - 0.2;
@@ -154,20 +149,19 @@ static void test_closed_loop_fixed_matches_float(void **state)
             worst_e = fmax(worst_e, fabs(yf - ref_next));
         }
     }
-    print_message("mfac closed loop: fixed vs float max |du| %.4f %% of range, float max |e| %.4f cm\n",
-                  worst_u * 100, worst_e);
-    assert_true(worst_u < 0.005);
-    assert_true(worst_e < 0.05);
+    printf("mfac closed loop: fixed vs float max |du| %.4f %% of range, float max |e| %.4f cm\n",
+           worst_u * 100, worst_e);
+    TEST_ASSERT_LESS_THAN_DOUBLE(0.005, worst_u);
+    TEST_ASSERT_LESS_THAN_DOUBLE(0.05, worst_e);
 }
 
 int main(void)
 {
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_first_step),
-        cmocka_unit_test(test_reset_conditions),
-        cmocka_unit_test(test_limits),
-        cmocka_unit_test(test_invalid_config),
-        cmocka_unit_test(test_closed_loop_fixed_matches_float),
-    };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    UNITY_BEGIN();
+    RUN_TEST(test_first_step);
+    RUN_TEST(test_reset_conditions);
+    RUN_TEST(test_limits);
+    RUN_TEST(test_invalid_config);
+    RUN_TEST(test_closed_loop_fixed_matches_float);
+    return UNITY_END();
 }

@@ -10,41 +10,39 @@ static pma_pid_config_t cfg(float kp, float ki, float kd, float tf, float kaw)
                               .period_s = 1e-3f, .u_min = -100.0f, .u_max = 100.0f};
 }
 
-static void test_proportional_and_integral(void **state)
+static void test_proportional_and_integral(void)
 {
-    (void)state;
     pma_pid_config_t c = cfg(10.0f, 50.0f, 0.0f, 0.0f, 0.0f);
     pma_pid_f32_t p;
-    assert_int_equal(pma_pid_init_f32(&p, &c), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_pid_init_f32(&p, &c));
     float u;
-    assert_int_equal(pma_pid_step_f32(&p, -1.0f, -1.5f, &u), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_pid_step_f32(&p, -1.0f, -1.5f, &u));
     assert_near(u, 5.0, 1e-6);                       /* I starts at 0 */
-    for (int k = 0; k < 999; ++k) assert_int_equal(pma_pid_step_f32(&p, -1.0f, -1.5f, &u), PMA_OK);
+    for (int k = 0; k < 999; ++k) TEST_ASSERT_EQUAL_INT(PMA_OK, pma_pid_step_f32(&p, -1.0f, -1.5f, &u));
     assert_near(u, 5.0 + 50.0 * 0.5 * 0.999, 1e-3);  /* 999 integrated steps of ki e T */
 }
 
 /* A reference step gives no derivative kick; a measurement step does, and
  * the filter spreads it (first value kd/(tf+T) times the step). */
-static void test_derivative_on_measurement(void **state)
+static void test_derivative_on_measurement(void)
 {
-    (void)state;
     pma_pid_config_t c = cfg(0.0f, 0.0f, 0.5f, 0.009f, 0.0f);
     pma_pid_f32_t p;
-    assert_int_equal(pma_pid_init_f32(&p, &c), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_pid_init_f32(&p, &c));
     float u;
-    assert_int_equal(pma_pid_step_f32(&p, 0.0f, -2.0f, &u), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_pid_step_f32(&p, 0.0f, -2.0f, &u));
     assert_near(u, 0.0, 0.0);
-    assert_int_equal(pma_pid_step_f32(&p, 1.0f, -2.0f, &u), PMA_OK);   /* reference step */
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_pid_step_f32(&p, 1.0f, -2.0f, &u));  /* reference step */
     assert_near(u, 0.0, 0.0);
-    assert_int_equal(pma_pid_step_f32(&p, 1.0f, -1.9f, &u), PMA_OK);   /* measurement +0.1 */
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_pid_step_f32(&p, 1.0f, -1.9f, &u));  /* measurement +0.1 */
     assert_near(u, -0.5 / 0.01 * 0.1, 1e-4);
-    assert_int_equal(pma_pid_step_f32(&p, 1.0f, -1.9f, &u), PMA_OK);   /* decays by tf/(tf+T) */
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_pid_step_f32(&p, 1.0f, -1.9f, &u));  /* decays by tf/(tf+T) */
     assert_near(u, -0.5 / 0.01 * 0.1 * 0.9, 1e-4);
     /* tf = 0: plain backward difference */
     c.tf_s = 0.0f;
-    assert_int_equal(pma_pid_init_f32(&p, &c), PMA_OK);
-    assert_int_equal(pma_pid_step_f32(&p, 0.0f, 0.0f, &u), PMA_OK);
-    assert_int_equal(pma_pid_step_f32(&p, 0.0f, 0.001f, &u), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_pid_init_f32(&p, &c));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_pid_step_f32(&p, 0.0f, 0.0f, &u));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_pid_step_f32(&p, 0.0f, 0.001f, &u));
     assert_near(u, -0.5, 1e-4);
 }
 
@@ -52,81 +50,78 @@ static void test_derivative_on_measurement(void **state)
  * the output limits, and (b) with back-calculation settles where
  * ki e + k_aw (u_max - v) = 0, i.e. I = u_max - kp e + ki e / k_aw; both
  * variants agree. */
-static void test_anti_windup(void **state)
+static void test_anti_windup(void)
 {
-    (void)state;
     pma_pid_config_t c = cfg(20.0f, 200.0f, 0.0f, 0.0f, 0.0f);
     pma_pid_f32_t p;
     pma_pid_q16_t q;
     float u;
     pma_q16_t uq;
-    assert_int_equal(pma_pid_init_f32(&p, &c), PMA_OK);
-    for (int k = 0; k < 3000; ++k) assert_int_equal(pma_pid_step_f32(&p, 10.0f, 0.0f, &u), PMA_OK);
-    assert_true(u == 100.0f && (p.flags & PMA_PID_FLAG_SAT_HIGH));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_pid_init_f32(&p, &c));
+    for (int k = 0; k < 3000; ++k) TEST_ASSERT_EQUAL_INT(PMA_OK, pma_pid_step_f32(&p, 10.0f, 0.0f, &u));
+    TEST_ASSERT_TRUE(u == 100.0f && (p.flags & PMA_PID_FLAG_SAT_HIGH));
     assert_near(p.i, 100.0, 0.0);                  /* clamped at the limit, not beyond */
     c.k_aw_per_s = 50.0f;
-    assert_int_equal(pma_pid_init_f32(&p, &c), PMA_OK);
-    assert_int_equal(pma_pid_init_q16(&q, &c), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_pid_init_f32(&p, &c));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_pid_init_q16(&q, &c));
     for (int k = 0; k < 3000; ++k) {
-        assert_int_equal(pma_pid_step_f32(&p, 10.0f, 0.0f, &u), PMA_OK);
-        assert_int_equal(pma_pid_step_q16(&q, Q16(10.0), 0, &uq), PMA_OK);
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_pid_step_f32(&p, 10.0f, 0.0f, &u));
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_pid_step_q16(&q, Q16(10.0), 0, &uq));
     }
-    assert_true(u == 100.0f);
+    TEST_ASSERT_TRUE(u == 100.0f);
     assert_near(p.i, 100.0 - 200.0 + 200.0 * 10.0 / 50.0, 1e-3);   /* -60 */
     assert_near(q.i_q32 / 4294967296.0, p.i, 1e-3);
 }
 
-static void test_invalid_and_bad_input(void **state)
+static void test_invalid_and_bad_input(void)
 {
-    (void)state;
     pma_pid_f32_t p;
     pma_pid_q16_t q;
     pma_pid_config_t c = cfg(1.0f, 1.0f, 1.0f, 0.01f, 1.0f);
-    assert_int_equal(pma_pid_init_f32(&p, &c), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_pid_init_f32(&p, &c));
     c.kp = -1.0f;
-    assert_int_equal(pma_pid_init_f32(&p, &c), PMA_ERR_RANGE);
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_RANGE, pma_pid_init_f32(&p, &c));
     float u = 3.0f;
-    assert_int_equal(pma_pid_step_f32(&p, 0.0f, 0.0f, &u), PMA_ERR_NOT_READY);
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_NOT_READY, pma_pid_step_f32(&p, 0.0f, 0.0f, &u));
     c = cfg(1.0f, NAN, 1.0f, 0.01f, 1.0f);
-    assert_int_equal(pma_pid_init_f32(&p, &c), PMA_ERR_NOT_FINITE);
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_NOT_FINITE, pma_pid_init_f32(&p, &c));
     c = cfg(1.0f, 1.0f, 1.0f, -0.01f, 1.0f);
-    assert_int_equal(pma_pid_init_q16(&q, &c), PMA_ERR_RANGE);
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_RANGE, pma_pid_init_q16(&q, &c));
     c = cfg(1.0f, 1.0f, 1.0f, 0.01f, 1.0f);
     c.period_s = 0.0f;
-    assert_int_equal(pma_pid_init_f32(&p, &c), PMA_ERR_RANGE);
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_RANGE, pma_pid_init_f32(&p, &c));
     c = cfg(1.0f, 1.0f, 1.0f, 0.01f, 1.0f);
     c.u_min = c.u_max;
-    assert_int_equal(pma_pid_init_f32(&p, &c), PMA_ERR_RANGE);
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_RANGE, pma_pid_init_f32(&p, &c));
     c = cfg(1.0f, 5000.0f, 1.0f, 0.01f, 1.0f);    /* ki T = 5 does not fit Q2.30 */
-    assert_int_equal(pma_pid_init_f32(&p, &c), PMA_OK);
-    assert_int_equal(pma_pid_init_q16(&q, &c), PMA_ERR_FIXED_RANGE);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_pid_init_f32(&p, &c));
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_FIXED_RANGE, pma_pid_init_q16(&q, &c));
     c = cfg(1.0f, 1.0f, 1.0f, 0.01f, 1.0f);
-    assert_int_equal(pma_pid_init_f32(&p, &c), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_pid_init_f32(&p, &c));
     const pma_pid_f32_t before = p;
-    assert_int_equal(pma_pid_step_f32(&p, NAN, 0.0f, &u), PMA_ERR_NOT_FINITE);
-    assert_int_equal(pma_pid_step_f32(&p, 0.0f, -INFINITY, &u), PMA_ERR_NOT_FINITE);
-    assert_memory_equal(&before, &p, sizeof p);
-    assert_true(u == 3.0f);
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_NOT_FINITE, pma_pid_step_f32(&p, NAN, 0.0f, &u));
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_NOT_FINITE, pma_pid_step_f32(&p, 0.0f, -INFINITY, &u));
+    TEST_ASSERT_EQUAL_MEMORY(&before, &p, sizeof p);
+    TEST_ASSERT_TRUE(u == 3.0f);
 }
 
 /* Closed loop on a second-order plant: fixed point follows float, and the
  * integrator's late increments (ki T e ~ 1e-6, below one Q16.16 LSB) are not
  * lost: zero steady-state error in both. */
-static void test_closed_loop_fixed_matches_float(void **state)
+static void test_closed_loop_fixed_matches_float(void)
 {
-    (void)state;
     pma_pid_config_t c = cfg(30.0f, 20.0f, 0.5f, 0.005f, 10.0f);
     pma_pid_f32_t p;
     pma_pid_q16_t q;
-    assert_int_equal(pma_pid_init_f32(&p, &c), PMA_OK);
-    assert_int_equal(pma_pid_init_q16(&q, &c), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_pid_init_f32(&p, &c));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_pid_init_q16(&q, &c));
     double xf = -2.0, vf = 0.0, xq = -2.0, vq = 0.0, worst = 0.0;
     const double T = 1e-3;
     for (int k = 0; k < 20000; ++k) {
         float u;
         pma_q16_t uq;
-        assert_int_equal(pma_pid_step_f32(&p, -1.5f, (float)xf, &u), PMA_OK);
-        assert_int_equal(pma_pid_step_q16(&q, Q16(-1.5), Q16(xq), &uq), PMA_OK);
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_pid_step_f32(&p, -1.5f, (float)xf, &u));
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_pid_step_q16(&q, Q16(-1.5), Q16(xq), &uq));
         /* x'' = 5 u - 20 x' - 50 (x + 2): needs u = 5 at x = -1.5 */
         const double af = 5.0 * u - 20.0 * vf - 50.0 * (xf + 2.0);
         const double aq = 5.0 * F16(uq) - 20.0 * vq - 50.0 * (xq + 2.0);
@@ -134,21 +129,20 @@ static void test_closed_loop_fixed_matches_float(void **state)
         vq += T * aq; xq += T * vq;
         worst = fmax(worst, fabs(F16(uq) - u) / (c.u_max - c.u_min));
     }
-    print_message("pid closed loop: fixed vs float max |du| %.4f %% of range; final e %.2e / %.2e cm\n",
-                  worst * 100, xf + 1.5, xq + 1.5);
-    assert_true(worst < 0.001);
+    printf("pid closed loop: fixed vs float max |du| %.4f %% of range; final e %.2e / %.2e cm\n",
+           worst * 100, xf + 1.5, xq + 1.5);
+    TEST_ASSERT_LESS_THAN_DOUBLE(0.001, worst);
     assert_near(xf, -1.5, 1e-3);
     assert_near(xq, -1.5, 1e-3);
 }
 
 int main(void)
 {
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_proportional_and_integral),
-        cmocka_unit_test(test_derivative_on_measurement),
-        cmocka_unit_test(test_anti_windup),
-        cmocka_unit_test(test_invalid_and_bad_input),
-        cmocka_unit_test(test_closed_loop_fixed_matches_float),
-    };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    UNITY_BEGIN();
+    RUN_TEST(test_proportional_and_integral);
+    RUN_TEST(test_derivative_on_measurement);
+    RUN_TEST(test_anti_windup);
+    RUN_TEST(test_invalid_and_bad_input);
+    RUN_TEST(test_closed_loop_fixed_matches_float);
+    return UNITY_END();
 }

@@ -13,74 +13,71 @@ static pma_ppc_config_t case3(void)
 }
 
 /* u = 0 at t = 0 whatever the initial error and velocity (alpha(0) = 0). */
-static void test_bumpless_start(void **state)
+static void test_bumpless_start(void)
 {
-    (void)state;
     pma_ppc_config_t c = case3();
     pma_ppc_f32_t f;
     pma_ppc_q16_t q;
-    assert_int_equal(pma_ppc_init_f32(&f, &c), PMA_OK);
-    assert_int_equal(pma_ppc_init_q16(&q, &c), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_f32(&f, &c));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_q16(&q, &c));
     const float errs[] = {-2.9f, -1.0f, -0.19f, 0.0f, 0.5f, 2.0f};
     const float vels[] = {-50.0f, 0.0f, 3.0f};
     for (unsigned i = 0; i < 6; ++i) {
         for (unsigned j = 0; j < 3; ++j) {
             float u = 1.0f;
             pma_q16_t uq = 1;
-            assert_int_equal(pma_ppc_step_f32(&f, 0.0f, -2.0f + errs[i], vels[j], -2.0f, &u), PMA_OK);
-            assert_true(u == 0.0f);
-            assert_true(f.out.lambda1_cm == 0.0f && f.out.lambda2_cm_s == 0.0f);
-            assert_int_equal(pma_ppc_step_q16(&q, 0, Q16(-2.0f + errs[i]), Q16(vels[j]), Q16(-2.0), &uq), PMA_OK);
-            assert_int_equal(uq, 0);
-            assert_int_equal(f.out.flags, 0);
-            assert_int_equal(q.out.flags, 0);
+            TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_f32(&f, 0.0f, -2.0f + errs[i], vels[j], -2.0f, &u));
+            TEST_ASSERT_TRUE(u == 0.0f);
+            TEST_ASSERT_TRUE(f.out.lambda1_cm == 0.0f && f.out.lambda2_cm_s == 0.0f);
+            TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_q16(&q, 0, Q16(-2.0f + errs[i]), Q16(vels[j]), Q16(-2.0), &uq));
+            TEST_ASSERT_EQUAL_INT(0, uq);
+            TEST_ASSERT_EQUAL_HEX32(0, f.out.flags);
+            TEST_ASSERT_EQUAL_HEX32(0, q.out.flags);
         }
     }
 }
 
 /* alpha(t) = 0.5 - 0.5 cos(pi t / t_u) before t_u, exactly 1 from t_u on,
  * monotone; e does not matter. */
-static void test_alpha_profile(void **state)
+static void test_alpha_profile(void)
 {
-    (void)state;
     pma_ppc_config_t c = case3();
     c.t_u_s = 6.0f;
     pma_ppc_f32_t f;
     pma_ppc_q16_t q;
-    assert_int_equal(pma_ppc_init_f32(&f, &c), PMA_OK);
-    assert_int_equal(pma_ppc_init_q16(&q, &c), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_f32(&f, &c));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_q16(&q, &c));
     float u, prev = -1.0f;
     pma_q16_t uq;
     for (int k = 0; k <= 800; ++k) {
         const double t = k * 0.01;
-        assert_int_equal(pma_ppc_step_f32(&f, (float)t, -2.01f, 0.0f, -2.0f, &u), PMA_OK);
-        assert_int_equal(pma_ppc_step_q16(&q, Q16(t), Q16(-2.01), 0, Q16(-2.0), &uq), PMA_OK);
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_f32(&f, (float)t, -2.01f, 0.0f, -2.0f, &u));
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_q16(&q, Q16(t), Q16(-2.01), 0, Q16(-2.0), &uq));
         const double tq = F16(Q16(t));
         const double want = tq < 6.0 ? 0.5 - 0.5 * cos(PI * tq / 6.0) : 1.0;
         assert_near(f.out.alpha, t < 6.0 ? 0.5 - 0.5 * cos(PI * t / 6.0) : 1.0, 2e-7);
         assert_near(pma_q30_to_f32(q.out.alpha), want, 2e-7);
-        assert_true(f.out.alpha >= prev);
+        TEST_ASSERT_TRUE(f.out.alpha >= prev);
         prev = f.out.alpha;
         if (t >= 6.0) {
-            assert_true(f.out.alpha == 1.0f);
-            assert_int_equal(q.out.alpha, PMA_Q30_ONE);
+            TEST_ASSERT_TRUE(f.out.alpha == 1.0f);
+            TEST_ASSERT_EQUAL_INT(PMA_Q30_ONE, q.out.alpha);
         }
     }
-    assert_int_equal(pma_ppc_step_f32(&f, 3.0f, -2.0f, 0.0f, -2.0f, &u), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_f32(&f, 3.0f, -2.0f, 0.0f, -2.0f, &u));
     assert_near(f.out.alpha, 0.5, 1e-7);
 }
 
 /* The law's sign: x above the reference at rest, after t_u -> negative u
  * (the actuator's positive direction is +x; polarity is the application's). */
-static void test_law_direction_and_equations(void **state)
+static void test_law_direction_and_equations(void)
 {
-    (void)state;
     pma_ppc_config_t c = case3();
     pma_ppc_f32_t f;
-    assert_int_equal(pma_ppc_init_f32(&f, &c), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_f32(&f, &c));
     float u;
-    assert_int_equal(pma_ppc_step_f32(&f, 5.0f, -1.99f, 0.1f, -2.0f, &u), PMA_OK);
-    assert_int_equal(f.out.flags, 0);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_f32(&f, 5.0f, -1.99f, 0.1f, -2.0f, &u));
+    TEST_ASSERT_EQUAL_HEX32(0, f.out.flags);
     /* the equations written out in double */
     const double e = 0.01, chi = tan(PI * e / (2 * 0.2)), theta = -2 * chi;
     const double l2 = 0.1 - theta, delta = tan(PI * l2 / (2 * 0.5));
@@ -90,138 +87,135 @@ static void test_law_direction_and_equations(void **state)
     assert_near(f.out.delta, delta, 1e-5 * fabs(delta));
     assert_near(f.out.beta_s_cm, beta, 1e-5 * beta);
     assert_near(u, -2.0 * beta * delta, 1e-4 * fabs(u));
-    assert_true(u < 0.0f);
-    assert_int_equal(pma_ppc_step_f32(&f, 5.0f, -2.01f, -0.1f, -2.0f, &u), PMA_OK);
-    assert_int_equal(f.out.flags, 0);
-    assert_true(u > 0.0f);
+    TEST_ASSERT_LESS_THAN_DOUBLE(0.0, u);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_f32(&f, 5.0f, -2.01f, -0.1f, -2.0f, &u));
+    TEST_ASSERT_EQUAL_HEX32(0, f.out.flags);
+    TEST_ASSERT_GREATER_THAN_DOUBLE(0.0, u);
 }
 
 /* At and beyond the barrier: clamp just inside, flag, count, finite output
  * saturated in the direction the law demands; both variants agree. */
-static void test_barrier_clamp(void **state)
+static void test_barrier_clamp(void)
 {
-    (void)state;
     pma_ppc_config_t c = case3();
     pma_ppc_f32_t f;
     pma_ppc_q16_t q;
-    assert_int_equal(pma_ppc_init_f32(&f, &c), PMA_OK);
-    assert_int_equal(pma_ppc_init_q16(&q, &c), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_f32(&f, &c));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_q16(&q, &c));
     float u;
     pma_q16_t uq;
     const float r_max = 1.0f - c.barrier_margin;
     const double tan_max = tan(PI / 2 * r_max);
     /* e = +0.3 > w1: lambda1 beyond the barrier, law pushes down */
-    assert_int_equal(pma_ppc_step_f32(&f, 10.0f, -1.7f, 0.0f, -2.0f, &u), PMA_OK);
-    assert_true(f.out.flags & PMA_PPC_FLAG_BARRIER1);
-    assert_true(f.out.flags & PMA_PPC_FLAG_BARRIER2);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_f32(&f, 10.0f, -1.7f, 0.0f, -2.0f, &u));
+    TEST_ASSERT_TRUE(f.out.flags & PMA_PPC_FLAG_BARRIER1);
+    TEST_ASSERT_TRUE(f.out.flags & PMA_PPC_FLAG_BARRIER2);
     assert_near(f.out.chi, tan_max, 1e-3 * tan_max);
-    assert_true(isfinite(f.out.u_law) && f.out.u_law < 0.0f);
-    assert_true(u == c.u_min);
-    assert_true(f.out.flags & PMA_PPC_FLAG_SAT_LOW);
-    assert_int_equal(pma_ppc_step_q16(&q, Q16(10.0), Q16(-1.7), 0, Q16(-2.0), &uq), PMA_OK);
-    assert_int_equal(q.out.flags, f.out.flags);
-    assert_int_equal(uq, Q16(c.u_min));
+    TEST_ASSERT_TRUE(isfinite(f.out.u_law) && f.out.u_law < 0.0f);
+    TEST_ASSERT_TRUE(u == c.u_min);
+    TEST_ASSERT_TRUE(f.out.flags & PMA_PPC_FLAG_SAT_LOW);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_q16(&q, Q16(10.0), Q16(-1.7), 0, Q16(-2.0), &uq));
+    TEST_ASSERT_EQUAL_HEX32(f.out.flags, q.out.flags);
+    TEST_ASSERT_EQUAL_INT(Q16(c.u_min), uq);
     assert_near(F16(q.out.chi), tan_max, 1e-3 * tan_max);
     /* negative side */
-    assert_int_equal(pma_ppc_step_f32(&f, 10.0f, -2.5f, 0.0f, -2.0f, &u), PMA_OK);
-    assert_true(u == c.u_max);
-    assert_int_equal(pma_ppc_step_q16(&q, Q16(10.0), Q16(-2.5), 0, Q16(-2.0), &uq), PMA_OK);
-    assert_int_equal(uq, Q16(c.u_max));
-    assert_int_equal(f.breaches1, 2);
-    assert_int_equal(f.breaches2, 2);
-    assert_int_equal(q.breaches1, 2);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_f32(&f, 10.0f, -2.5f, 0.0f, -2.0f, &u));
+    TEST_ASSERT_TRUE(u == c.u_max);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_q16(&q, Q16(10.0), Q16(-2.5), 0, Q16(-2.0), &uq));
+    TEST_ASSERT_EQUAL_INT(Q16(c.u_max), uq);
+    TEST_ASSERT_EQUAL_INT(2, f.breaches1);
+    TEST_ASSERT_EQUAL_INT(2, f.breaches2);
+    TEST_ASSERT_EQUAL_INT(2, q.breaches1);
     /* exactly at r = r_max counts as reaching the barrier */
-    assert_int_equal(pma_ppc_step_f32(&f, 10.0f, -2.0f + 0.2f * r_max, 0.0f, -2.0f, &u), PMA_OK);
-    assert_true(f.out.flags & PMA_PPC_FLAG_BARRIER1);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_f32(&f, 10.0f, -2.0f + 0.2f * r_max, 0.0f, -2.0f, &u));
+    TEST_ASSERT_TRUE(f.out.flags & PMA_PPC_FLAG_BARRIER1);
     /* inside: no flag, and lambda2 alone can breach (large velocity) */
-    assert_int_equal(pma_ppc_step_f32(&f, 10.0f, -2.0f, 0.6f, -2.0f, &u), PMA_OK);
-    assert_int_equal(f.out.flags & PMA_PPC_FLAG_BARRIER1, 0);
-    assert_true(f.out.flags & PMA_PPC_FLAG_BARRIER2);
-    assert_true(u == c.u_min);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_f32(&f, 10.0f, -2.0f, 0.6f, -2.0f, &u));
+    TEST_ASSERT_EQUAL_HEX32(0, f.out.flags & PMA_PPC_FLAG_BARRIER1);
+    TEST_ASSERT_TRUE(f.out.flags & PMA_PPC_FLAG_BARRIER2);
+    TEST_ASSERT_TRUE(u == c.u_min);
     /* reset clears the counters */
     pma_ppc_reset_f32(&f);
-    assert_int_equal(f.breaches1, 0);
+    TEST_ASSERT_EQUAL_INT(0, f.breaches1);
 }
 
 /* Soft barrier: identical to the paper below soft_r, continuous at soft_r,
  * linear (bounded growth) beyond it. */
-static void test_soft_barrier(void **state)
+static void test_soft_barrier(void)
 {
-    (void)state;
     pma_ppc_config_t c = case3();
     pma_ppc_config_t cs = c;
     cs.soft_barrier_r = 0.9f;
     pma_ppc_f32_t paper, soft;
     pma_ppc_q16_t softq;
-    assert_int_equal(pma_ppc_init_f32(&paper, &c), PMA_OK);
-    assert_int_equal(pma_ppc_init_f32(&soft, &cs), PMA_OK);
-    assert_int_equal(pma_ppc_init_q16(&softq, &cs), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_f32(&paper, &c));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_f32(&soft, &cs));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_q16(&softq, &cs));
     float u1, u2;
     pma_q16_t uq;
     /* r1 = 0.5 (e = 0.1, chi = 1, theta = -2), v = -1.9 so r2 = 0.2: identical */
-    assert_int_equal(pma_ppc_step_f32(&paper, 10.0f, -1.9f, -1.9f, -2.0f, &u1), PMA_OK);
-    assert_int_equal(pma_ppc_step_f32(&soft, 10.0f, -1.9f, -1.9f, -2.0f, &u2), PMA_OK);
-    assert_true(u1 == u2);
-    assert_int_equal(soft.out.flags & (PMA_PPC_FLAG_SOFT1 | PMA_PPC_FLAG_SOFT2), 0);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_f32(&paper, 10.0f, -1.9f, -1.9f, -2.0f, &u1));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_f32(&soft, 10.0f, -1.9f, -1.9f, -2.0f, &u2));
+    TEST_ASSERT_TRUE(u1 == u2);
+    TEST_ASSERT_EQUAL_HEX32(0, soft.out.flags & (PMA_PPC_FLAG_SOFT1 | PMA_PPC_FLAG_SOFT2));
     /* continuity of chi at soft_r = 0.9 (e = 0.18) */
     const float e_lo = 0.2f * 0.8999f, e_hi = 0.2f * 0.9001f;
-    assert_int_equal(pma_ppc_step_f32(&soft, 10.0f, -2.0f + e_lo, 0.0f, -2.0f, &u1), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_f32(&soft, 10.0f, -2.0f + e_lo, 0.0f, -2.0f, &u1));
     const float chi_lo = soft.out.chi;
-    assert_int_equal(pma_ppc_step_f32(&soft, 10.0f, -2.0f + e_hi, 0.0f, -2.0f, &u1), PMA_OK);
-    assert_true(soft.out.flags & PMA_PPC_FLAG_SOFT1);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_f32(&soft, 10.0f, -2.0f + e_hi, 0.0f, -2.0f, &u1));
+    TEST_ASSERT_TRUE(soft.out.flags & PMA_PPC_FLAG_SOFT1);
     assert_near(soft.out.chi, chi_lo, 0.01 * chi_lo);
     /* beyond: linear growth, far below the paper's tan */
     const double t9 = tan(PI / 2 * 0.9), s9 = 1 + t9 * t9;
-    assert_int_equal(pma_ppc_step_f32(&soft, 10.0f, -2.0f + 0.2f * 0.98f, 0.0f, -2.0f, &u1), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_f32(&soft, 10.0f, -2.0f + 0.2f * 0.98f, 0.0f, -2.0f, &u1));
     assert_near(soft.out.chi, t9 + PI / 2 * s9 * (0.98 - 0.9), 1e-3 * soft.out.chi);
-    assert_true(soft.out.chi < tan(PI / 2 * 0.98));
-    assert_int_equal(pma_ppc_step_q16(&softq, Q16(10.0), Q16(-2.0f + 0.2f * 0.98f), 0, Q16(-2.0), &uq), PMA_OK);
+    TEST_ASSERT_LESS_THAN_DOUBLE(tan(PI / 2 * 0.98), soft.out.chi);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_q16(&softq, Q16(10.0), Q16(-2.0f + 0.2f * 0.98f), 0, Q16(-2.0), &uq));
     assert_near(F16(softq.out.chi), soft.out.chi, 2e-3 * soft.out.chi);
-    assert_int_equal(softq.out.flags, soft.out.flags);
+    TEST_ASSERT_EQUAL_HEX32(soft.out.flags, softq.out.flags);
 }
 
 /* Feedforward switch: off keeps u_ff = 0; on integrates the law's output,
  * holds it while saturated in the same direction, stays within limits. */
-static void test_feedforward(void **state)
+static void test_feedforward(void)
 {
-    (void)state;
     pma_ppc_config_t c = case3();
     pma_ppc_f32_t off;
-    assert_int_equal(pma_ppc_init_f32(&off, &c), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_f32(&off, &c));
     float u;
     for (int k = 0; k < 100; ++k) {
-        assert_int_equal(pma_ppc_step_f32(&off, 5.0f, -1.99f, 0.0f, -2.0f, &u), PMA_OK);
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_f32(&off, 5.0f, -1.99f, 0.0f, -2.0f, &u));
     }
-    assert_true(off.u_ff == 0.0f && off.out.u_ff == 0.0f);
-    assert_true(u == off.out.u_law);
+    TEST_ASSERT_TRUE(off.u_ff == 0.0f && off.out.u_ff == 0.0f);
+    TEST_ASSERT_TRUE(u == off.out.u_law);
 
     c.ff_gain_per_s = 2.0f;
     c.ff_init = 10.0f;
     pma_ppc_f32_t on;
     pma_ppc_q16_t onq;
-    assert_int_equal(pma_ppc_init_f32(&on, &c), PMA_OK);
-    assert_int_equal(pma_ppc_init_q16(&onq, &c), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_f32(&on, &c));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_q16(&onq, &c));
     pma_q16_t uq;
-    assert_int_equal(pma_ppc_step_f32(&on, 5.0f, -1.99f, 0.0f, -2.0f, &u), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_f32(&on, 5.0f, -1.99f, 0.0f, -2.0f, &u));
     const float law = on.out.u_law;
     assert_near(on.out.u_ff, 10.0, 0.0);
     assert_near(u, 10.0 + law, 1e-4);
     assert_near(on.u_ff, 10.0 + 2.0 * 1e-3 * law, 1e-5);
     for (int k = 0; k < 999; ++k) {
-        assert_int_equal(pma_ppc_step_f32(&on, 5.0f, -1.99f, 0.0f, -2.0f, &u), PMA_OK);
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_f32(&on, 5.0f, -1.99f, 0.0f, -2.0f, &u));
     }
     for (int k = 0; k < 1000; ++k) {
-        assert_int_equal(pma_ppc_step_q16(&onq, Q16(5.0), Q16(-1.99), 0, Q16(-2.0), &uq), PMA_OK);
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_q16(&onq, Q16(5.0), Q16(-1.99), 0, Q16(-2.0), &uq));
     }
     assert_near(on.u_ff, 10.0 + 2.0 * law, 1e-3);   /* 1 s of integration */
     assert_near(F16(onq.out.u_ff), on.out.u_ff, 0.01);
     /* saturated in the law's direction: the feedforward holds (anti-windup) */
     const float held = on.u_ff;
-    assert_int_equal(pma_ppc_step_f32(&on, 5.0f, -1.7f, 0.0f, -2.0f, &u), PMA_OK);
-    assert_true(on.out.flags & PMA_PPC_FLAG_SAT_LOW);
-    assert_true(on.u_ff == held);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_f32(&on, 5.0f, -1.7f, 0.0f, -2.0f, &u));
+    TEST_ASSERT_TRUE(on.out.flags & PMA_PPC_FLAG_SAT_LOW);
+    TEST_ASSERT_TRUE(on.u_ff == held);
     pma_ppc_reset_f32(&on);
-    assert_true(on.u_ff == 10.0f);
+    TEST_ASSERT_TRUE(on.u_ff == 10.0f);
 }
 
 static void expect_invalid(pma_ppc_config_t c, int want)
@@ -229,22 +223,21 @@ static void expect_invalid(pma_ppc_config_t c, int want)
     pma_ppc_f32_t f;
     pma_ppc_q16_t q;
     pma_ppc_config_t good = case3();
-    assert_int_equal(pma_ppc_init_f32(&f, &good), PMA_OK);   /* was ready ... */
-    assert_int_equal(pma_ppc_init_q16(&q, &good), PMA_OK);
-    assert_int_equal(pma_ppc_validate_config(&c), want);
-    assert_int_equal(pma_ppc_init_f32(&f, &c), want);        /* ... now unusable */
-    assert_int_equal(pma_ppc_init_q16(&q, &c), want);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_f32(&f, &good));  /* was ready ... */
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_q16(&q, &good));
+    TEST_ASSERT_EQUAL_INT(want, pma_ppc_validate_config(&c));
+    TEST_ASSERT_EQUAL_INT(want, pma_ppc_init_f32(&f, &c));   /* ... now unusable */
+    TEST_ASSERT_EQUAL_INT(want, pma_ppc_init_q16(&q, &c));
     float u = 123.0f;
     pma_q16_t uq = 123;
-    assert_int_equal(pma_ppc_step_f32(&f, 1.0f, 0.0f, 0.0f, 0.0f, &u), PMA_ERR_NOT_READY);
-    assert_int_equal(pma_ppc_step_q16(&q, 0, 0, 0, 0, &uq), PMA_ERR_NOT_READY);
-    assert_true(u == 123.0f);
-    assert_int_equal(uq, 123);
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_NOT_READY, pma_ppc_step_f32(&f, 1.0f, 0.0f, 0.0f, 0.0f, &u));
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_NOT_READY, pma_ppc_step_q16(&q, 0, 0, 0, 0, &uq));
+    TEST_ASSERT_TRUE(u == 123.0f);
+    TEST_ASSERT_EQUAL_INT(123, uq);
 }
 
-static void test_invalid_config(void **state)
+static void test_invalid_config(void)
 {
-    (void)state;
     pma_ppc_config_t c;
 #define BAD(field, value, code) do { c = case3(); c.field = (value); expect_invalid(c, code); } while (0)
     BAD(a_cm_s, 0.0f, PMA_ERR_RANGE);
@@ -279,58 +272,56 @@ static void test_invalid_config(void **state)
     c = case3();
     c.band_enabled = 0;
     c.k_low_cm = NAN;
-    assert_int_equal(pma_ppc_validate_config(&c), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_validate_config(&c));
     /* fixed point only: reciprocals out of Q8.24 */
     c = case3();
     c.w1_cm = 0.01f;
     pma_ppc_q16_t q;
     pma_ppc_f32_t f;
-    assert_int_equal(pma_ppc_init_f32(&f, &c), PMA_OK);
-    assert_int_equal(pma_ppc_init_q16(&q, &c), PMA_ERR_FIXED_RANGE);
-    assert_int_equal(pma_ppc_init_f32(NULL, &c), PMA_ERR_NULL);
-    assert_int_equal(pma_ppc_init_f32(&f, NULL), PMA_ERR_NULL);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_f32(&f, &c));
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_FIXED_RANGE, pma_ppc_init_q16(&q, &c));
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_NULL, pma_ppc_init_f32(NULL, &c));
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_NULL, pma_ppc_init_f32(&f, NULL));
 }
 
 /* Non-finite or negative-time inputs: an error, no output, no state change. */
-static void test_bad_step_inputs(void **state)
+static void test_bad_step_inputs(void)
 {
-    (void)state;
     pma_ppc_config_t c = case3();
     c.ff_gain_per_s = 1.0f;
     pma_ppc_f32_t f;
-    assert_int_equal(pma_ppc_init_f32(&f, &c), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_f32(&f, &c));
     float u = 0.0f;
-    assert_int_equal(pma_ppc_step_f32(&f, 3.0f, -1.9f, 0.5f, -2.0f, &u), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_f32(&f, 3.0f, -1.9f, 0.5f, -2.0f, &u));
     const pma_ppc_f32_t before = f;
     float u2 = 77.0f;
-    assert_int_equal(pma_ppc_step_f32(&f, NAN, -1.9f, 0.5f, -2.0f, &u2), PMA_ERR_NOT_FINITE);
-    assert_int_equal(pma_ppc_step_f32(&f, 3.0f, INFINITY, 0.5f, -2.0f, &u2), PMA_ERR_NOT_FINITE);
-    assert_int_equal(pma_ppc_step_f32(&f, 3.0f, -1.9f, NAN, -2.0f, &u2), PMA_ERR_NOT_FINITE);
-    assert_int_equal(pma_ppc_step_f32(&f, 3.0f, -1.9f, 0.5f, -INFINITY, &u2), PMA_ERR_NOT_FINITE);
-    assert_int_equal(pma_ppc_step_f32(&f, 3.0f, 3e38f, 0.5f, -3e38f, &u2), PMA_ERR_NOT_FINITE);
-    assert_int_equal(pma_ppc_step_f32(&f, -0.001f, -1.9f, 0.5f, -2.0f, &u2), PMA_ERR_RANGE);
-    assert_int_equal(pma_ppc_step_f32(&f, 3.0f, -1.9f, 0.5f, -2.0f, NULL), PMA_ERR_NULL);
-    assert_true(u2 == 77.0f);
-    assert_memory_equal(&before, &f, sizeof f);
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_NOT_FINITE, pma_ppc_step_f32(&f, NAN, -1.9f, 0.5f, -2.0f, &u2));
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_NOT_FINITE, pma_ppc_step_f32(&f, 3.0f, INFINITY, 0.5f, -2.0f, &u2));
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_NOT_FINITE, pma_ppc_step_f32(&f, 3.0f, -1.9f, NAN, -2.0f, &u2));
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_NOT_FINITE, pma_ppc_step_f32(&f, 3.0f, -1.9f, 0.5f, -INFINITY, &u2));
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_NOT_FINITE, pma_ppc_step_f32(&f, 3.0f, 3e38f, 0.5f, -3e38f, &u2));
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_RANGE, pma_ppc_step_f32(&f, -0.001f, -1.9f, 0.5f, -2.0f, &u2));
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_NULL, pma_ppc_step_f32(&f, 3.0f, -1.9f, 0.5f, -2.0f, NULL));
+    TEST_ASSERT_TRUE(u2 == 77.0f);
+    TEST_ASSERT_EQUAL_MEMORY(&before, &f, sizeof f);
     pma_ppc_q16_t q;
     pma_q16_t uq = 5;
-    assert_int_equal(pma_ppc_init_q16(&q, &c), PMA_OK);
-    assert_int_equal(pma_ppc_step_q16(&q, -1, 0, 0, 0, &uq), PMA_ERR_RANGE);
-    assert_int_equal(uq, 5);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_q16(&q, &c));
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_RANGE, pma_ppc_step_q16(&q, -1, 0, 0, 0, &uq));
+    TEST_ASSERT_EQUAL_INT(5, uq);
     /* extreme but finite fixed-point inputs saturate instead of wrapping */
-    assert_int_equal(pma_ppc_step_q16(&q, Q16(9.0), PMA_Q16_MAX, PMA_Q16_MAX, PMA_Q16_MIN, &uq), PMA_OK);
-    assert_int_equal(uq, Q16(c.u_min));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_q16(&q, Q16(9.0), PMA_Q16_MAX, PMA_Q16_MAX, PMA_Q16_MIN, &uq));
+    TEST_ASSERT_EQUAL_INT(Q16(c.u_min), uq);
 }
 
 /* Float and fixed point agree over a sweep of the operating region. */
-static void test_fixed_matches_float(void **state)
+static void test_fixed_matches_float(void)
 {
-    (void)state;
     pma_ppc_config_t c = case3();
     pma_ppc_f32_t f;
     pma_ppc_q16_t q;
-    assert_int_equal(pma_ppc_init_f32(&f, &c), PMA_OK);
-    assert_int_equal(pma_ppc_init_q16(&q, &c), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_f32(&f, &c));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_q16(&q, &c));
     uint32_t seed = 12345u;
     double worst = 0.0;
     for (int k = 0; k < 4000; ++k) {
@@ -339,27 +330,26 @@ static void test_fixed_matches_float(void **state)
         const float v = (float)F16(Q16(0.8 * test_rand_uniform(&seed)));
         float u;
         pma_q16_t uq;
-        assert_int_equal(pma_ppc_step_f32(&f, t, -2.0f + e, v, -2.0f, &u), PMA_OK);
-        assert_int_equal(pma_ppc_step_q16(&q, Q16(t), Q16(-2.0f + e), Q16(v), Q16(-2.0), &uq), PMA_OK);
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_f32(&f, t, -2.0f + e, v, -2.0f, &u));
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_q16(&q, Q16(t), Q16(-2.0f + e), Q16(v), Q16(-2.0), &uq));
         const double d = fabs(F16(uq) - u) / (c.u_max - c.u_min);
         if (d > worst) worst = d;
     }
-    print_message("ppc fixed vs float: max |du| = %.4f %% of the input range\n", worst * 100);
-    assert_true(worst < 0.0005);   /* 0.05 % of the range; measured 0.026 % */
+    printf("ppc fixed vs float: max |du| = %.4f %% of the input range\n", worst * 100);
+    TEST_ASSERT_LESS_THAN_DOUBLE(0.0005, worst);  /* 0.05 % of the range; measured 0.026 % */
 }
 
 int main(void)
 {
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_bumpless_start),
-        cmocka_unit_test(test_alpha_profile),
-        cmocka_unit_test(test_law_direction_and_equations),
-        cmocka_unit_test(test_barrier_clamp),
-        cmocka_unit_test(test_soft_barrier),
-        cmocka_unit_test(test_feedforward),
-        cmocka_unit_test(test_invalid_config),
-        cmocka_unit_test(test_bad_step_inputs),
-        cmocka_unit_test(test_fixed_matches_float),
-    };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    UNITY_BEGIN();
+    RUN_TEST(test_bumpless_start);
+    RUN_TEST(test_alpha_profile);
+    RUN_TEST(test_law_direction_and_equations);
+    RUN_TEST(test_barrier_clamp);
+    RUN_TEST(test_soft_barrier);
+    RUN_TEST(test_feedforward);
+    RUN_TEST(test_invalid_config);
+    RUN_TEST(test_bad_step_inputs);
+    RUN_TEST(test_fixed_matches_float);
+    return UNITY_END();
 }

@@ -13,24 +13,23 @@ static pma_velest_config_t vcfg(uint8_t kind, float fc)
 
 /* Ramp of 2 cm/s: the tracking observer converges to the slope exactly,
  * the filtered difference too (after its lag), both variants. */
-static void test_ramp(void **state)
+static void test_ramp(void)
 {
-    (void)state;
     for (uint8_t kind = 0; kind < 2; ++kind) {
         pma_velest_config_t c = vcfg(kind, 20.0f);
         pma_velest_f32_t f;
         pma_velest_q16_t q;
-        assert_int_equal(pma_velest_init_f32(&f, &c), PMA_OK);
-        assert_int_equal(pma_velest_init_q16(&q, &c), PMA_OK);
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_velest_init_f32(&f, &c));
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_velest_init_q16(&q, &c));
         float v = 1.0f;
         pma_q16_t vq;
-        assert_int_equal(pma_velest_step_f32(&f, -2.0f, &v), PMA_OK);
-        assert_true(v == 0.0f);                      /* first sample primes: no kick */
-        assert_int_equal(pma_velest_step_q16(&q, Q16(-2.0), &vq), PMA_OK);
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_velest_step_f32(&f, -2.0f, &v));
+        TEST_ASSERT_TRUE(v == 0.0f);                 /* first sample primes: no kick */
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_velest_step_q16(&q, Q16(-2.0), &vq));
         for (int k = 1; k <= 1000; ++k) {
             const double x = -2.0 + 2.0 * k * 1e-3;
-            assert_int_equal(pma_velest_step_f32(&f, (float)x, &v), PMA_OK);
-            assert_int_equal(pma_velest_step_q16(&q, Q16(x), &vq), PMA_OK);
+            TEST_ASSERT_EQUAL_INT(PMA_OK, pma_velest_step_f32(&f, (float)x, &v));
+            TEST_ASSERT_EQUAL_INT(PMA_OK, pma_velest_step_q16(&q, Q16(x), &vq));
         }
         assert_near(v, 2.0, 2e-3);
         assert_near(F16(vq), 2.0, 5e-3);
@@ -39,20 +38,19 @@ static void test_ramp(void **state)
 
 /* White position noise: the measured std of v matches the documented noise
  * gain (exact closed form for the filtered difference) within 5 %. */
-static void test_noise_gain(void **state)
+static void test_noise_gain(void)
 {
-    (void)state;
     const double sigma = 0.001;   /* cm, Baumer-class sensor noise */
     for (uint8_t kind = 0; kind < 2; ++kind) {
         pma_velest_config_t c = vcfg(kind, 30.0f);
         pma_velest_f32_t f;
-        assert_int_equal(pma_velest_init_f32(&f, &c), PMA_OK);
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_velest_init_f32(&f, &c));
         uint32_t seed = 2024u + kind;
         double sum = 0.0, sum2 = 0.0;
         int n = 0;
         for (int k = 0; k < 60000; ++k) {
             float v;
-            assert_int_equal(pma_velest_step_f32(&f, (float)(-2.0 + sigma * test_rand_gauss(&seed)), &v), PMA_OK);
+            TEST_ASSERT_EQUAL_INT(PMA_OK, pma_velest_step_f32(&f, (float)(-2.0 + sigma * test_rand_gauss(&seed)), &v));
             if (k >= 1000) {
                 sum += v;
                 sum2 += (double)v * v;
@@ -61,8 +59,8 @@ static void test_noise_gain(void **state)
         }
         const double std = sqrt(sum2 / n - (sum / n) * (sum / n));
         const double predicted = sigma * pma_velest_noise_gain(&c);
-        print_message("%s, fc 30 Hz: velocity noise %.4f cm/s, predicted %.4f cm/s\n",
-                      kind ? "tracking" : "filtered difference", std, predicted);
+        printf("%s, fc 30 Hz: velocity noise %.4f cm/s, predicted %.4f cm/s\n",
+               kind ? "tracking" : "filtered difference", std, predicted);
         assert_near(std, predicted, 0.05 * predicted);
     }
     /* the closed form of the filtered difference */
@@ -71,68 +69,65 @@ static void test_noise_gain(void **state)
     assert_near(pma_velest_noise_gain(&c), (1 - p) / 1e-3 * sqrt(2 / (1 + p)), 1e-2);
     /* noise gain rises with bandwidth */
     pma_velest_config_t c2 = vcfg(PMA_VELEST_FILTERED_DIFF, 60.0f);
-    assert_true(pma_velest_noise_gain(&c2) > pma_velest_noise_gain(&c));
+    TEST_ASSERT_GREATER_THAN_DOUBLE(pma_velest_noise_gain(&c), pma_velest_noise_gain(&c2));
 }
 
 /* Sine of 1 Hz, 0.5 cm: amplitude and phase lag as the first-order filter
  * predicts for the filtered difference (|H| = 1/sqrt(1 + (f/fc)^2)). */
-static void test_sine_response(void **state)
+static void test_sine_response(void)
 {
-    (void)state;
     pma_velest_config_t c = vcfg(PMA_VELEST_FILTERED_DIFF, 10.0f);
     pma_velest_f32_t f;
-    assert_int_equal(pma_velest_init_f32(&f, &c), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_velest_init_f32(&f, &c));
     double peak = 0.0;
     for (int k = 0; k < 3000; ++k) {
         float v;
-        assert_int_equal(pma_velest_step_f32(&f, (float)(0.5 * sin(2 * PI * k * 1e-3)), &v), PMA_OK);
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_velest_step_f32(&f, (float)(0.5 * sin(2 * PI * k * 1e-3)), &v));
         if (k > 1000) peak = fmax(peak, v);
     }
     const double want = 0.5 * 2 * PI / sqrt(1.0 + 0.01);
     assert_near(peak, want, 0.01 * want);
 }
 
-static void test_invalid(void **state)
+static void test_invalid(void)
 {
-    (void)state;
     pma_velest_f32_t f;
     pma_velest_q16_t q;
     pma_velest_config_t c = vcfg(PMA_VELEST_FILTERED_DIFF, 500.0f);   /* Nyquist */
-    assert_int_equal(pma_velest_init_f32(&f, &c), PMA_ERR_RANGE);
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_RANGE, pma_velest_init_f32(&f, &c));
     float v = 9.0f;
-    assert_int_equal(pma_velest_step_f32(&f, 0.0f, &v), PMA_ERR_NOT_READY);
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_NOT_READY, pma_velest_step_f32(&f, 0.0f, &v));
     c = vcfg(PMA_VELEST_FILTERED_DIFF, 0.0f);
-    assert_int_equal(pma_velest_init_q16(&q, &c), PMA_ERR_RANGE);
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_RANGE, pma_velest_init_q16(&q, &c));
     c = vcfg(7, 30.0f);
-    assert_int_equal(pma_velest_init_f32(&f, &c), PMA_ERR_RANGE);
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_RANGE, pma_velest_init_f32(&f, &c));
     c = vcfg(PMA_VELEST_TRACKING, NAN);
-    assert_int_equal(pma_velest_init_f32(&f, &c), PMA_ERR_NOT_FINITE);
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_NOT_FINITE, pma_velest_init_f32(&f, &c));
     c = vcfg(PMA_VELEST_TRACKING, 30.0f);
     c.period_s = -1e-3f;
-    assert_int_equal(pma_velest_init_f32(&f, &c), PMA_ERR_RANGE);
-    assert_true(isnan(pma_velest_noise_gain(&c)));
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_RANGE, pma_velest_init_f32(&f, &c));
+    TEST_ASSERT_TRUE(isnan(pma_velest_noise_gain(&c)));
     c = vcfg(PMA_VELEST_TRACKING, 30.0f);
-    assert_int_equal(pma_velest_init_f32(&f, &c), PMA_OK);
-    assert_int_equal(pma_velest_step_f32(&f, -2.0f, &v), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_velest_init_f32(&f, &c));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_velest_step_f32(&f, -2.0f, &v));
     const pma_velest_f32_t before = f;
-    assert_int_equal(pma_velest_step_f32(&f, NAN, &v), PMA_ERR_NOT_FINITE);
-    assert_memory_equal(&before, &f, sizeof f);
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_NOT_FINITE, pma_velest_step_f32(&f, NAN, &v));
+    TEST_ASSERT_EQUAL_MEMORY(&before, &f, sizeof f);
     /* reset: the next sample primes again (no velocity kick from a jump) */
     pma_velest_reset_f32(&f);
-    assert_int_equal(pma_velest_step_f32(&f, 5.0f, &v), PMA_OK);
-    assert_true(v == 0.0f);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_velest_step_f32(&f, 5.0f, &v));
+    TEST_ASSERT_TRUE(v == 0.0f);
 }
 
 /* Fixed point follows float on noisy sine data. */
-static void test_fixed_matches_float(void **state)
+static void test_fixed_matches_float(void)
 {
-    (void)state;
     for (uint8_t kind = 0; kind < 2; ++kind) {
         pma_velest_config_t c = vcfg(kind, 30.0f);
         pma_velest_f32_t f;
         pma_velest_q16_t q;
-        assert_int_equal(pma_velest_init_f32(&f, &c), PMA_OK);
-        assert_int_equal(pma_velest_init_q16(&q, &c), PMA_OK);
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_velest_init_f32(&f, &c));
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_velest_init_q16(&q, &c));
         uint32_t seed = 99u;
         double worst = 0.0;
         for (int k = 0; k < 5000; ++k) {
@@ -140,23 +135,22 @@ static void test_fixed_matches_float(void **state)
                                             0.001 * test_rand_gauss(&seed)));
             float v;
             pma_q16_t vq;
-            assert_int_equal(pma_velest_step_f32(&f, x, &v), PMA_OK);
-            assert_int_equal(pma_velest_step_q16(&q, Q16(x), &vq), PMA_OK);
+            TEST_ASSERT_EQUAL_INT(PMA_OK, pma_velest_step_f32(&f, x, &v));
+            TEST_ASSERT_EQUAL_INT(PMA_OK, pma_velest_step_q16(&q, Q16(x), &vq));
             worst = fmax(worst, fabs(F16(vq) - v));
         }
-        print_message("velest kind %u: fixed vs float max |dv| %.2e cm/s\n", (unsigned)kind, worst);
-        assert_true(worst < 0.01);
+        printf("velest kind %u: fixed vs float max |dv| %.2e cm/s\n", (unsigned)kind, worst);
+        TEST_ASSERT_LESS_THAN_DOUBLE(0.01, worst);
     }
 }
 
 int main(void)
 {
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_ramp),
-        cmocka_unit_test(test_noise_gain),
-        cmocka_unit_test(test_sine_response),
-        cmocka_unit_test(test_invalid),
-        cmocka_unit_test(test_fixed_matches_float),
-    };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    UNITY_BEGIN();
+    RUN_TEST(test_ramp);
+    RUN_TEST(test_noise_gain);
+    RUN_TEST(test_sine_response);
+    RUN_TEST(test_invalid);
+    RUN_TEST(test_fixed_matches_float);
+    return UNITY_END();
 }

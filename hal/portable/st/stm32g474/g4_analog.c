@@ -18,44 +18,31 @@ static uint8_t adc_ready;
 
 int g4_adc_init(void)
 {
+    ADC_TypeDef *const adc = g4_io.adc1;
     adc_ready = 0;
-    g4_rmw(g4_io.rcc, G4_RCC_AHB2ENR_OFFSET, 0u,
-           G4_RCC_AHB2ENR_ADC12EN_Msk | G4_RCC_AHB2ENR_GPIOAEN_Msk);
-    (void)g4_rd(g4_io.rcc, G4_RCC_AHB2ENR_OFFSET);
+    SET_BIT(g4_io.rcc->AHB2ENR, RCC_AHB2ENR_ADC12EN | RCC_AHB2ENR_GPIOAEN);
+    (void)READ_REG(g4_io.rcc->AHB2ENR);
     g4_gpio_mode(g4_io.gpioa, G4_ADC_PIN, G4_GPIO_MODE_ANALOG);
-    g4_rmw(g4_io.adc12_common, G4_ADC12_COMMON_CCR_OFFSET, G4_ADC12_COMMON_CCR_CKMODE_Msk,
-           G4_FIELD(G4_ADC_CKMODE_HCLK_DIV4, G4_ADC12_COMMON_CCR_CKMODE));
+    MODIFY_REG(g4_io.adc12_common->CCR, ADC_CCR_CKMODE,
+               _VAL2FLD(ADC_CCR_CKMODE, G4_ADC_CKMODE_HCLK_DIV4));
     /* out of deep power-down, then the regulator on, then wait for it */
-    g4_wr(g4_io.adc1, G4_ADC1_CR_OFFSET, 0u);
-    g4_wr(g4_io.adc1, G4_ADC1_CR_OFFSET, G4_ADC1_CR_ADVREGEN_Msk);
+    WRITE_REG(adc->CR, 0u);
+    WRITE_REG(adc->CR, ADC_CR_ADVREGEN);
     g4_cpu_delay_cycles(ADC_VREG_STARTUP_CYCLES);
     /* single-ended calibration (ADEN = 0) */
-    g4_wr(g4_io.adc1, G4_ADC1_CR_OFFSET, G4_ADC1_CR_ADVREGEN_Msk | G4_ADC1_CR_ADCAL_Msk);
-    if (g4_wait(g4_io.adc1, G4_ADC1_CR_OFFSET, G4_ADC1_CR_ADCAL_Msk, 0u, G4_POLLS_SHORT) != 0) {
-        return PMA_ERR_IO;
-    }
-    g4_wr(g4_io.adc1, G4_ADC1_CFGR_OFFSET,
-          G4_ADC1_CFGR_CONT_Msk | G4_ADC1_CFGR_OVRMOD_Msk); /* 12 bits, right-aligned */
-    g4_wr(g4_io.adc1, G4_ADC1_CFGR2_OFFSET,
-          G4_ADC1_CFGR2_ROVSE_Msk | G4_FIELD(G4_ADC_OVSR_16X, G4_ADC1_CFGR2_OVSR) |
-              G4_FIELD(G4_ADC_OVSS_SHIFT4, G4_ADC1_CFGR2_OVSS));
-    g4_rmw(g4_io.adc1, G4_ADC1_SMPR1_OFFSET, G4_ADC1_SMPR1_SMP1_Msk,
-           G4_FIELD(G4_ADC_SMP_92CYC5, G4_ADC1_SMPR1_SMP1));
-    g4_wr(g4_io.adc1, G4_ADC1_SQR1_OFFSET,
-          G4_FIELD(0u, G4_ADC1_SQR1_L) | G4_FIELD(G4_ADC_CHANNEL, G4_ADC1_SQR1_SQ1));
-    g4_w1c(g4_io.adc1, G4_ADC1_ISR_OFFSET, G4_ADC1_ISR_ADRDY_Msk);
-    g4_wr(g4_io.adc1, G4_ADC1_CR_OFFSET, G4_ADC1_CR_ADVREGEN_Msk | G4_ADC1_CR_ADEN_Msk);
-    if (g4_wait(g4_io.adc1, G4_ADC1_ISR_OFFSET, G4_ADC1_ISR_ADRDY_Msk, G4_ADC1_ISR_ADRDY_Msk,
-                G4_POLLS_SHORT) != 0) {
-        return PMA_ERR_IO;
-    }
-    g4_wr(g4_io.adc1, G4_ADC1_CR_OFFSET,
-          G4_ADC1_CR_ADVREGEN_Msk | G4_ADC1_CR_ADEN_Msk | G4_ADC1_CR_ADSTART_Msk);
+    WRITE_REG(adc->CR, ADC_CR_ADVREGEN | ADC_CR_ADCAL);
+    if (g4_wait(&adc->CR, ADC_CR_ADCAL, 0u, G4_POLLS_SHORT) != 0) return PMA_ERR_IO;
+    WRITE_REG(adc->CFGR, ADC_CFGR_CONT | ADC_CFGR_OVRMOD); /* 12 bits, right-aligned */
+    WRITE_REG(adc->CFGR2, ADC_CFGR2_ROVSE | _VAL2FLD(ADC_CFGR2_OVSR, G4_ADC_OVSR_16X) |
+                              _VAL2FLD(ADC_CFGR2_OVSS, G4_ADC_OVSS_SHIFT4));
+    MODIFY_REG(adc->SMPR1, ADC_SMPR1_SMP1, _VAL2FLD(ADC_SMPR1_SMP1, G4_ADC_SMP_92CYC5));
+    WRITE_REG(adc->SQR1, _VAL2FLD(ADC_SQR1_L, 0u) | _VAL2FLD(ADC_SQR1_SQ1, G4_ADC_CHANNEL));
+    g4_w1c(&adc->ISR, ADC_ISR_ADRDY);
+    WRITE_REG(adc->CR, ADC_CR_ADVREGEN | ADC_CR_ADEN);
+    if (g4_wait(&adc->ISR, ADC_ISR_ADRDY, ADC_ISR_ADRDY, G4_POLLS_SHORT) != 0) return PMA_ERR_IO;
+    WRITE_REG(adc->CR, ADC_CR_ADVREGEN | ADC_CR_ADEN | ADC_CR_ADSTART);
     /* the first oversampled result, so that a read never returns the reset 0 */
-    if (g4_wait(g4_io.adc1, G4_ADC1_ISR_OFFSET, G4_ADC1_ISR_EOC_Msk, G4_ADC1_ISR_EOC_Msk,
-                G4_POLLS_SHORT) != 0) {
-        return PMA_ERR_IO;
-    }
+    if (g4_wait(&adc->ISR, ADC_ISR_EOC, ADC_ISR_EOC, G4_POLLS_SHORT) != 0) return PMA_ERR_IO;
     adc_ready = 1;
     return PMA_OK;
 }
@@ -63,50 +50,47 @@ int g4_adc_init(void)
 int g4_adc_read(uint16_t *raw_counts)
 {
     if (raw_counts == NULL) return PMA_ERR_NULL;
-    const uint32_t cr = g4_rd(g4_io.adc1, G4_ADC1_CR_OFFSET);
-    if (!adc_ready || !(cr & G4_ADC1_CR_ADSTART_Msk) || !(cr & G4_ADC1_CR_ADEN_Msk)) {
+    const uint32_t cr = READ_REG(g4_io.adc1->CR);
+    if (!adc_ready || !(cr & ADC_CR_ADSTART) || !(cr & ADC_CR_ADEN)) {
         return PMA_ERR_IO; /* the conversions stopped */
     }
     /* reading DR clears EOC; DR keeps the newest result */
-    *raw_counts = (uint16_t)(G4_GET(g4_rd(g4_io.adc1, G4_ADC1_DR_OFFSET), G4_ADC1_DR_RDATA) & 0xFFFu);
+    *raw_counts = (uint16_t)(_FLD2VAL(ADC_DR_RDATA, READ_REG(g4_io.adc1->DR)) & 0xFFFu);
     return PMA_OK;
 }
 
 void g4_adc_stop(void)
 {
+    ADC_TypeDef *const adc = g4_io.adc1;
     adc_ready = 0;
-    const uint32_t cr = g4_rd(g4_io.adc1, G4_ADC1_CR_OFFSET);
-    if (cr & G4_ADC1_CR_ADSTART_Msk) {
-        g4_wr(g4_io.adc1, G4_ADC1_CR_OFFSET,
-              G4_ADC1_CR_ADVREGEN_Msk | G4_ADC1_CR_ADEN_Msk | G4_ADC1_CR_ADSTP_Msk);
-        (void)g4_wait(g4_io.adc1, G4_ADC1_CR_OFFSET, G4_ADC1_CR_ADSTART_Msk, 0u, G4_POLLS_SHORT);
+    const uint32_t cr = READ_REG(adc->CR);
+    if (cr & ADC_CR_ADSTART) {
+        WRITE_REG(adc->CR, ADC_CR_ADVREGEN | ADC_CR_ADEN | ADC_CR_ADSTP);
+        (void)g4_wait(&adc->CR, ADC_CR_ADSTART, 0u, G4_POLLS_SHORT);
     }
 }
 
 int g4_dac_init(void)
 {
-    g4_rmw(g4_io.rcc, G4_RCC_AHB2ENR_OFFSET, 0u,
-           G4_RCC_AHB2ENR_DAC1EN_Msk | G4_RCC_AHB2ENR_GPIOAEN_Msk);
-    (void)g4_rd(g4_io.rcc, G4_RCC_AHB2ENR_OFFSET);
+    DAC_TypeDef *const dac = g4_io.dac1;
+    SET_BIT(g4_io.rcc->AHB2ENR, RCC_AHB2ENR_DAC1EN | RCC_AHB2ENR_GPIOAEN);
+    (void)READ_REG(g4_io.rcc->AHB2ENR);
     g4_gpio_mode(g4_io.gpioa, G4_DAC_PIN, G4_GPIO_MODE_ANALOG);
     /* before EN1: HFSEL for an AHB clock above 160 MHz, normal mode with
-     * the buffer on, to the pin */
-    g4_rmw(g4_io.dac1, G4_DAC1_CR_OFFSET, G4_DAC1_CR_EN1_Msk, 0u);
-    g4_wr(g4_io.dac1, G4_DAC1_MCR_OFFSET,
-          G4_FIELD(G4_DAC_HFSEL_ABOVE_160MHZ, G4_DAC1_MCR_HFSEL) | G4_FIELD(G4_DAC_MODE_PIN_UNBUFFERED, G4_DAC1_MCR_MODE1));
-    g4_wr(g4_io.dac1, G4_DAC1_DHR12R1_OFFSET, 0u); /* 0 V: the regulator's minimum pressure */
-    g4_rmw(g4_io.dac1, G4_DAC1_CR_OFFSET, 0u, G4_DAC1_CR_EN1_Msk);
-    if (g4_wait(g4_io.dac1, G4_DAC1_SR_OFFSET, G4_DAC1_SR_DAC1RDY_Msk, G4_DAC1_SR_DAC1RDY_Msk,
-                G4_POLLS_SHORT) != 0) {
-        return PMA_ERR_IO;
-    }
+     * the buffer off, to the pin */
+    CLEAR_BIT(dac->CR, DAC_CR_EN1);
+    WRITE_REG(dac->MCR, _VAL2FLD(DAC_MCR_HFSEL, G4_DAC_HFSEL_ABOVE_160MHZ) |
+                            _VAL2FLD(DAC_MCR_MODE1, G4_DAC_MODE_PIN_UNBUFFERED));
+    WRITE_REG(dac->DHR12R1, 0u); /* 0 V: the regulator's minimum pressure */
+    SET_BIT(dac->CR, DAC_CR_EN1);
+    if (g4_wait(&dac->SR, DAC_SR_DAC1RDY, DAC_SR_DAC1RDY, G4_POLLS_SHORT) != 0) return PMA_ERR_IO;
     return PMA_OK;
 }
 
 int g4_dac_write(uint16_t counts)
 {
     if (counts > G4_DAC_MAX_COUNTS) return PMA_ERR_RANGE;
-    if (!(g4_rd(g4_io.dac1, G4_DAC1_CR_OFFSET) & G4_DAC1_CR_EN1_Msk)) return PMA_ERR_IO;
-    g4_wr(g4_io.dac1, G4_DAC1_DHR12R1_OFFSET, G4_FIELD(counts, G4_DAC1_DHR12R1_DACC1DHR));
+    if (!READ_BIT(g4_io.dac1->CR, DAC_CR_EN1)) return PMA_ERR_IO;
+    WRITE_REG(g4_io.dac1->DHR12R1, _VAL2FLD(DAC_DHR12R1_DACC1DHR, counts));
     return PMA_OK;
 }

@@ -16,48 +16,44 @@ int g4_pll_for(uint32_t src_hz, uint32_t pllsrc, g4_pll_t *pll)
 uint32_t g4_pllcfgr_value(const g4_pll_t *pll)
 {
     /* register codes: PLLM = M - 1, PLLN = N, PLLR: 0 = /2, 1 = /4, 2 = /6, 3 = /8 */
-    return G4_FIELD(pll->pllsrc, G4_RCC_PLLCFGR_PLLSRC) | G4_FIELD(pll->m - 1u, G4_RCC_PLLCFGR_PLLM) |
-           G4_FIELD(pll->n, G4_RCC_PLLCFGR_PLLN) | G4_FIELD(pll->r / 2u - 1u, G4_RCC_PLLCFGR_PLLR) |
-           G4_RCC_PLLCFGR_PLLREN_Msk;
+    return (pll->pllsrc & RCC_PLLCFGR_PLLSRC_Msk) | _VAL2FLD(RCC_PLLCFGR_PLLM, pll->m - 1u) |
+           _VAL2FLD(RCC_PLLCFGR_PLLN, pll->n) | _VAL2FLD(RCC_PLLCFGR_PLLR, pll->r / 2u - 1u) |
+           RCC_PLLCFGR_PLLREN;
 }
 
 static int start_hse(void)
 {
-    g4_rmw(g4_io.rcc, G4_RCC_CR_OFFSET, G4_RCC_CR_HSEBYP_Msk,
-           (G4_HSE_BYPASS ? G4_RCC_CR_HSEBYP_Msk : 0u));
-    g4_rmw(g4_io.rcc, G4_RCC_CR_OFFSET, 0u, G4_RCC_CR_HSEON_Msk);
-    if (g4_wait(g4_io.rcc, G4_RCC_CR_OFFSET, G4_RCC_CR_HSERDY_Msk, G4_RCC_CR_HSERDY_Msk,
-                G4_POLLS_LONG) == 0) {
-        return 0;
-    }
-    g4_rmw(g4_io.rcc, G4_RCC_CR_OFFSET, G4_RCC_CR_HSEON_Msk, 0u); /* no crystal: give up on it */
+    RCC_TypeDef *const rcc = g4_io.rcc;
+    MODIFY_REG(rcc->CR, RCC_CR_HSEBYP, (G4_HSE_BYPASS ? RCC_CR_HSEBYP : 0u));
+    SET_BIT(rcc->CR, RCC_CR_HSEON);
+    if (g4_wait(&rcc->CR, RCC_CR_HSERDY, RCC_CR_HSERDY, G4_POLLS_LONG) == 0) return 0;
+    CLEAR_BIT(rcc->CR, RCC_CR_HSEON); /* no crystal: give up on it */
     return -1;
 }
 
 static int start_pll(const g4_pll_t *pll)
 {
-    g4_wr(g4_io.rcc, G4_RCC_PLLCFGR_OFFSET, g4_pllcfgr_value(pll));
-    g4_rmw(g4_io.rcc, G4_RCC_CR_OFFSET, 0u, G4_RCC_CR_PLLON_Msk);
-    return g4_wait(g4_io.rcc, G4_RCC_CR_OFFSET, G4_RCC_CR_PLLRDY_Msk, G4_RCC_CR_PLLRDY_Msk,
-                   G4_POLLS_SHORT);
+    RCC_TypeDef *const rcc = g4_io.rcc;
+    WRITE_REG(rcc->PLLCFGR, g4_pllcfgr_value(pll));
+    SET_BIT(rcc->CR, RCC_CR_PLLON);
+    return g4_wait(&rcc->CR, RCC_CR_PLLRDY, RCC_CR_PLLRDY, G4_POLLS_SHORT);
 }
 
 g4_clock_source_t g4_clock_init(int prefer_hse)
 {
+    RCC_TypeDef *const rcc = g4_io.rcc;
     /* 1. range 1 boost mode (R1MODE = 0), required above 150 MHz */
-    g4_rmw(g4_io.rcc, G4_RCC_APB1ENR1_OFFSET, 0u, G4_RCC_APB1ENR1_PWREN_Msk);
-    (void)g4_rd(g4_io.rcc, G4_RCC_APB1ENR1_OFFSET); /* the enable takes 2 cycles: read back */
-    g4_rmw(g4_io.pwr, G4_PWR_CR1_OFFSET, G4_PWR_CR1_VOS_Msk,
-           G4_FIELD(G4_PWR_CR1_VOS_RANGE1, G4_PWR_CR1_VOS));
-    g4_rmw(g4_io.pwr, G4_PWR_CR5_OFFSET, G4_PWR_CR5_R1MODE_Msk, 0u);
-    (void)g4_wait(g4_io.pwr, G4_PWR_SR2_OFFSET, G4_PWR_SR2_VOSF_Msk, 0u, G4_POLLS_SHORT);
+    SET_BIT(rcc->APB1ENR1, RCC_APB1ENR1_PWREN);
+    (void)READ_REG(rcc->APB1ENR1); /* the enable takes 2 cycles: read back */
+    MODIFY_REG(g4_io.pwr->CR1, PWR_CR1_VOS, PWR_CR1_VOS_0); /* VOS 01: range 1 */
+    CLEAR_BIT(g4_io.pwr->CR5, PWR_CR5_R1MODE);
+    (void)g4_wait(&g4_io.pwr->SR2, PWR_SR2_VOSF, 0u, G4_POLLS_SHORT);
 
     /* 2. flash wait states before the clock rises; prefetch and caches on */
-    g4_rmw(g4_io.flash, G4_FLASH_ACR_OFFSET, G4_FLASH_ACR_LATENCY_Msk,
-           G4_FIELD(G4_FLASH_LATENCY_170MHZ, G4_FLASH_ACR_LATENCY) | G4_FLASH_ACR_PRFTEN_Msk |
-               G4_FLASH_ACR_ICEN_Msk | G4_FLASH_ACR_DCEN_Msk);
-    if (G4_GET(g4_rd(g4_io.flash, G4_FLASH_ACR_OFFSET), G4_FLASH_ACR_LATENCY) !=
-        G4_FLASH_LATENCY_170MHZ) {
+    MODIFY_REG(g4_io.flash->ACR, FLASH_ACR_LATENCY,
+               _VAL2FLD(FLASH_ACR_LATENCY, G4_FLASH_LATENCY_170MHZ) | FLASH_ACR_PRFTEN |
+                   FLASH_ACR_ICEN | FLASH_ACR_DCEN);
+    if (_FLD2VAL(FLASH_ACR_LATENCY, READ_REG(g4_io.flash->ACR)) != G4_FLASH_LATENCY_170MHZ) {
         return (g4_clock_source_t)0; /* never raise the clock without the wait states */
     }
 
@@ -65,29 +61,24 @@ g4_clock_source_t g4_clock_init(int prefer_hse)
     g4_clock_source_t src = G4_CLOCK_HSI16;
     g4_pll_t pll;
     if (prefer_hse && start_hse() == 0 &&
-        g4_pll_for(G4_HSE_HZ, G4_RCC_PLLCFGR_PLLSRC_HSE, &pll) == PMA_OK) {
+        g4_pll_for(G4_HSE_HZ, RCC_PLLCFGR_PLLSRC_HSE, &pll) == PMA_OK) {
         src = G4_CLOCK_HSE;
     } else {
-        g4_rmw(g4_io.rcc, G4_RCC_CR_OFFSET, 0u, G4_RCC_CR_HSION_Msk);
-        (void)g4_wait(g4_io.rcc, G4_RCC_CR_OFFSET, G4_RCC_CR_HSIRDY_Msk, G4_RCC_CR_HSIRDY_Msk,
-                      G4_POLLS_SHORT);
-        (void)g4_pll_for(G4_HSI16_HZ, G4_RCC_PLLCFGR_PLLSRC_HSI16, &pll);
+        SET_BIT(rcc->CR, RCC_CR_HSION);
+        (void)g4_wait(&rcc->CR, RCC_CR_HSIRDY, RCC_CR_HSIRDY, G4_POLLS_SHORT);
+        (void)g4_pll_for(G4_HSI16_HZ, RCC_PLLCFGR_PLLSRC_HSI, &pll);
     }
     if (start_pll(&pll) != 0) return (g4_clock_source_t)0;
 
     /* 4. switch with AHB /2 first: a step of the load current straight to
      * 170 MHz is not allowed in boost mode (RM0440 7.2.7); APB1, APB2 /1 */
-    g4_rmw(g4_io.rcc, G4_RCC_CFGR_OFFSET,
-           G4_RCC_CFGR_HPRE_Msk | G4_RCC_CFGR_PPRE1_Msk | G4_RCC_CFGR_PPRE2_Msk | G4_RCC_CFGR_SW_Msk,
-           G4_FIELD(G4_RCC_CFGR_HPRE_DIV2, G4_RCC_CFGR_HPRE) |
-               G4_FIELD(G4_RCC_CFGR_SW_PLL, G4_RCC_CFGR_SW));
-    if (g4_wait(g4_io.rcc, G4_RCC_CFGR_OFFSET, G4_RCC_CFGR_SWS_Msk,
-                G4_FIELD(G4_RCC_CFGR_SW_PLL, G4_RCC_CFGR_SWS), G4_POLLS_SHORT) != 0) {
+    MODIFY_REG(rcc->CFGR, RCC_CFGR_HPRE | RCC_CFGR_PPRE1 | RCC_CFGR_PPRE2 | RCC_CFGR_SW,
+               RCC_CFGR_HPRE_DIV2 | RCC_CFGR_SW_PLL);
+    if (g4_wait(&rcc->CFGR, RCC_CFGR_SWS, RCC_CFGR_SWS_PLL, G4_POLLS_SHORT) != 0) {
         return (g4_clock_source_t)0;
     }
     g4_cpu_delay_cycles(G4_SYSCLK_HZ / 2u / 1000000u * 2u); /* >= 1 us at 85 MHz */
-    g4_rmw(g4_io.rcc, G4_RCC_CFGR_OFFSET, G4_RCC_CFGR_HPRE_Msk,
-           G4_FIELD(G4_RCC_CFGR_HPRE_DIV1, G4_RCC_CFGR_HPRE));
+    MODIFY_REG(rcc->CFGR, RCC_CFGR_HPRE, RCC_CFGR_HPRE_DIV1);
     sysclk_hz = G4_SYSCLK_HZ;
     return src;
 }
@@ -99,27 +90,25 @@ uint32_t g4_clock_sysclk_hz(void)
 
 /* ----------------------------------------------------------------- GPIO -- */
 
-void g4_gpio_mode(uintptr_t port, uint32_t pin, uint32_t mode)
+void g4_gpio_mode(GPIO_TypeDef *port, uint32_t pin, uint32_t mode)
 {
-    const uint32_t stride = G4_GPIOA_MODER_MODER1_Pos - G4_GPIOA_MODER_MODER0_Pos;
-    g4_rmw(port, G4_GPIOA_MODER_OFFSET, G4_GPIOA_MODER_MODER0_Msk << (stride * pin),
-           (mode & 3u) << (stride * pin));
+    const uint32_t stride = GPIO_MODER_MODE1_Pos - GPIO_MODER_MODE0_Pos;
+    MODIFY_REG(port->MODER, GPIO_MODER_MODE0_Msk << (stride * pin), (mode & 3u) << (stride * pin));
 }
 
-void g4_gpio_af(uintptr_t port, uint32_t pin, uint32_t af)
+void g4_gpio_af(GPIO_TypeDef *port, uint32_t pin, uint32_t af)
 {
-    const uint32_t stride = G4_GPIOA_AFRL_AFRL1_Pos - G4_GPIOA_AFRL_AFRL0_Pos;
-    const uint32_t reg = pin < 8u ? G4_GPIOA_AFRL_OFFSET : G4_GPIOA_AFRH_OFFSET;
+    /* AFR[0] = AFRL (pins 0..7), AFR[1] = AFRH (pins 8..15), 4 bits each */
+    const uint32_t stride = GPIO_AFRL_AFSEL1_Pos - GPIO_AFRL_AFSEL0_Pos;
     const uint32_t shift = stride * (pin & 7u);
-    g4_rmw(port, reg, G4_GPIOA_AFRL_AFRL0_Msk << shift, (af & 0xFu) << shift);
+    MODIFY_REG(port->AFR[pin < 8u ? 0 : 1], GPIO_AFRL_AFSEL0_Msk << shift, (af & 0xFu) << shift);
     g4_gpio_mode(port, pin, G4_GPIO_MODE_AF);
 }
 
-void g4_gpio_write(uintptr_t port, uint32_t pin, int high)
+void g4_gpio_write(GPIO_TypeDef *port, uint32_t pin, int high)
 {
     /* BSRR: atomic, no read-modify-write of ODR */
-    g4_wr(port, G4_GPIOA_BSRR_OFFSET,
-          high ? (G4_GPIOA_BSRR_BS0_Msk << pin) : (G4_GPIOA_BSRR_BR0_Msk << pin));
+    WRITE_REG(port->BSRR, high ? (GPIO_BSRR_BS0 << pin) : (GPIO_BSRR_BR0 << pin));
 }
 
 /* ---------------------------------------------------------------- reset -- */
@@ -129,16 +118,16 @@ pma_reset_cause_t g4_reset_cause_from_csr(uint32_t csr)
     /* Order matters: the reset pin flag is set by every internal reset too
      * (the MCU drives NRST), and BORRSTF by every power-on (POR and BOR are
      * one circuit), so the specific causes come first. */
-    if (csr & (G4_RCC_CSR_IWDGRSTF_Msk | G4_RCC_CSR_WWDGRSTF_Msk)) return PMA_RESET_WATCHDOG;
-    if (csr & G4_RCC_CSR_SFTRSTF_Msk) return PMA_RESET_SOFTWARE;
-    if (csr & G4_RCC_CSR_BORRSTF_Msk) return PMA_RESET_POWER_ON;
-    if (csr & G4_RCC_CSR_PINRSTF_Msk) return PMA_RESET_PIN;
+    if (csr & (RCC_CSR_IWDGRSTF | RCC_CSR_WWDGRSTF)) return PMA_RESET_WATCHDOG;
+    if (csr & RCC_CSR_SFTRSTF) return PMA_RESET_SOFTWARE;
+    if (csr & RCC_CSR_BORRSTF) return PMA_RESET_POWER_ON;
+    if (csr & RCC_CSR_PINRSTF) return PMA_RESET_PIN;
     return PMA_RESET_UNKNOWN; /* option byte load, low-power reset, or no flag */
 }
 
 pma_reset_cause_t g4_reset_latch(void)
 {
-    const pma_reset_cause_t c = g4_reset_cause_from_csr(g4_rd(g4_io.rcc, G4_RCC_CSR_OFFSET));
-    g4_rmw(g4_io.rcc, G4_RCC_CSR_OFFSET, 0u, G4_RCC_CSR_RMVF_Msk);
+    const pma_reset_cause_t c = g4_reset_cause_from_csr(READ_REG(g4_io.rcc->CSR));
+    SET_BIT(g4_io.rcc->CSR, RCC_CSR_RMVF);
     return c;
 }

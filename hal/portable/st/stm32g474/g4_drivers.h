@@ -1,7 +1,9 @@
 /* The STM32G474 port's drivers (one file each), below the port interface
  * (pma_hal_stm32g474.c implements pma/hal.h with them). Register access only
  * through g4_io (g4_io.h), so tests/board/test_g4_drivers.c runs every driver
- * on the host against a RAM register file. Units are in the names. */
+ * on the host against a RAM register file. Registers, bits and fields are
+ * ST's (stm32g474xx.h, g4_cmsis.h); the rest is g4_port_defs.h. Units are in
+ * the names. */
 #ifndef G4_DRIVERS_H
 #define G4_DRIVERS_H
 
@@ -23,12 +25,13 @@
 #define G4_PLL_IN_HZ 4000000u          /* VCO input after /M (2.66..8 MHz allowed) */
 #define G4_PLL_N 85u                   /* VCO 340 MHz */
 #define G4_PLL_R 2u                    /* SYSCLK = VCO / 2 = 170 MHz */
-#define G4_FLASH_LATENCY_170MHZ 4u     /* RM0440 table 9: 4 WS above 136 MHz (boost) */
+#define G4_FLASH_LATENCY_170MHZ FLASH_ACR_LATENCY_4WS /* RM0440 table 9: 4 WS above 136 MHz (boost) */
 
 typedef enum g4_clock_source { G4_CLOCK_HSE = 1, G4_CLOCK_HSI16 = 2 } g4_clock_source_t;
 
 typedef struct g4_pll {
-    uint32_t pllsrc, m, n, r;          /* divider values (not register codes) */
+    uint32_t pllsrc;                   /* RCC_PLLCFGR_PLLSRC_HSI or _HSE (ST's, at bit 0) */
+    uint32_t m, n, r;                  /* divider values (not register codes) */
 } g4_pll_t;
 
 /* PLL dividers giving 170 MHz from src_hz (a multiple of 4 MHz, up to 64 MHz). */
@@ -43,9 +46,9 @@ g4_clock_source_t g4_clock_init(int prefer_hse);
 uint32_t g4_clock_sysclk_hz(void);     /* after g4_clock_init; 16 MHz before */
 
 /* ----------------------------------------------------------------- GPIO -- */
-void g4_gpio_mode(uintptr_t port, uint32_t pin, uint32_t mode);
-void g4_gpio_af(uintptr_t port, uint32_t pin, uint32_t af);
-void g4_gpio_write(uintptr_t port, uint32_t pin, int high);
+void g4_gpio_mode(GPIO_TypeDef *port, uint32_t pin, uint32_t mode);
+void g4_gpio_af(GPIO_TypeDef *port, uint32_t pin, uint32_t af);
+void g4_gpio_write(GPIO_TypeDef *port, uint32_t pin, int high);
 
 /* ---------------------------------------------------------------- reset -- */
 pma_reset_cause_t g4_reset_cause_from_csr(uint32_t rcc_csr);

@@ -4,7 +4,7 @@
  * such as the SN65HVD230; build with -DG4_CAN_PINS_PB8_PB9=1 for PB8/PB9
  * (the NUCLEO's Arduino D15/D14). Kernel clock: PCLK1 (170 MHz).
  *
- * Message RAM: the G4's fixed layout (g4_regs.h, G4_MRAM_*); the node's
+ * Message RAM: the G4's fixed layout (g4_port_defs.h, G4_MRAM_*); the node's
  * filters are classic id + mask standard filters storing into Rx FIFO 0,
  * frames that match none are rejected (no filter: every standard frame is
  * accepted into FIFO 0); extended and remote frames are rejected.
@@ -74,36 +74,34 @@ int g4_can_timing_for(uint32_t kernel_hz, uint32_t bitrate_bps, g4_can_timing_t 
 uint32_t g4_nbtp_value(const g4_can_timing_t *t)
 {
     /* every field holds its value minus one */
-    return G4_FIELD(t->sjw_tq - 1u, G4_FDCAN1_NBTP_NSJW) |
-           G4_FIELD(t->prescaler - 1u, G4_FDCAN1_NBTP_NBRP) |
-           G4_FIELD(t->tseg1_tq - 1u, G4_FDCAN1_NBTP_NTSEG1) |
-           G4_FIELD(t->tseg2_tq - 1u, G4_FDCAN1_NBTP_NTSEG2);
+    return _VAL2FLD(FDCAN_NBTP_NSJW, t->sjw_tq - 1u) | _VAL2FLD(FDCAN_NBTP_NBRP, t->prescaler - 1u) |
+           _VAL2FLD(FDCAN_NBTP_NTSEG1, t->tseg1_tq - 1u) |
+           _VAL2FLD(FDCAN_NBTP_NTSEG2, t->tseg2_tq - 1u);
 }
 
 /* ------------------------------------------------------------ init mode -- */
 
 static int enter_init(void)
 {
-    g4_rmw(g4_io.fdcan1, G4_FDCAN1_CCCR_OFFSET, 0u, G4_FDCAN1_CCCR_INIT_Msk);
-    if (g4_wait(g4_io.fdcan1, G4_FDCAN1_CCCR_OFFSET, G4_FDCAN1_CCCR_INIT_Msk,
-                G4_FDCAN1_CCCR_INIT_Msk, G4_POLLS_SHORT) != 0) {
+    FDCAN_GlobalTypeDef *const can = g4_io.fdcan1;
+    SET_BIT(can->CCCR, FDCAN_CCCR_INIT);
+    if (g4_wait(&can->CCCR, FDCAN_CCCR_INIT, FDCAN_CCCR_INIT, G4_POLLS_SHORT) != 0) {
         return PMA_ERR_IO;
     }
-    g4_rmw(g4_io.fdcan1, G4_FDCAN1_CCCR_OFFSET, 0u, G4_FDCAN1_CCCR_CCE_Msk);
+    SET_BIT(can->CCCR, FDCAN_CCCR_CCE);
     return PMA_OK;
 }
 
 static int leave_init(void)
 {
-    g4_rmw(g4_io.fdcan1, G4_FDCAN1_CCCR_OFFSET, G4_FDCAN1_CCCR_CCE_Msk | G4_FDCAN1_CCCR_INIT_Msk,
-           0u);
-    return g4_wait(g4_io.fdcan1, G4_FDCAN1_CCCR_OFFSET, G4_FDCAN1_CCCR_INIT_Msk, 0u,
-                   G4_POLLS_SHORT) == 0 ? PMA_OK : PMA_ERR_IO;
+    FDCAN_GlobalTypeDef *const can = g4_io.fdcan1;
+    CLEAR_BIT(can->CCCR, FDCAN_CCCR_CCE | FDCAN_CCCR_INIT);
+    return g4_wait(&can->CCCR, FDCAN_CCCR_INIT, 0u, G4_POLLS_SHORT) == 0 ? PMA_OK : PMA_ERR_IO;
 }
 
 static void mram_wr(uint32_t offset, uint32_t value)
 {
-    g4_wr(g4_io.mram, offset, value);
+    g4_io.mram[offset / 4u] = value;
 }
 
 /* Filters and RXGFC; the controller must be in INIT with CCE. */
@@ -120,11 +118,11 @@ static void program_filters(const pma_can_filter_t *filters, size_t count)
         mram_wr(G4_MRAM_FLSSA + 4u * i, s0);
     }
     const uint32_t anfs = count == 0u ? G4_FDCAN_ANF_FIFO0 : G4_FDCAN_ANF_REJECT;
-    g4_wr(g4_io.fdcan1, G4_FDCAN1_RXGFC_OFFSET,
-          G4_FIELD(count, G4_FDCAN1_RXGFC_LSS) | G4_FIELD(0u, G4_FDCAN1_RXGFC_LSE) |
-              G4_FIELD(anfs, G4_FDCAN1_RXGFC_ANFS) |
-              G4_FIELD(G4_FDCAN_ANF_REJECT, G4_FDCAN1_RXGFC_ANFE) | G4_FDCAN1_RXGFC_RRFS_Msk |
-              G4_FDCAN1_RXGFC_RRFE_Msk);
+    WRITE_REG(g4_io.fdcan1->RXGFC,
+              _VAL2FLD(FDCAN_RXGFC_LSS, count) | _VAL2FLD(FDCAN_RXGFC_LSE, 0u) |
+                  _VAL2FLD(FDCAN_RXGFC_ANFS, anfs) |
+                  _VAL2FLD(FDCAN_RXGFC_ANFE, G4_FDCAN_ANF_REJECT) | FDCAN_RXGFC_RRFS |
+                  FDCAN_RXGFC_RRFE);
 }
 
 int g4_can_init(uint32_t kernel_hz, uint32_t bitrate_bps)
@@ -133,19 +131,21 @@ int g4_can_init(uint32_t kernel_hz, uint32_t bitrate_bps)
     g4_can_timing_t t;
     int rc = g4_can_timing_for(kernel_hz, bitrate_bps, &t);
     if (rc != PMA_OK) return rc;
-    g4_nvic_disable(G4_IRQ_FDCAN1_IT0);
+    g4_nvic_disable(FDCAN1_IT0_IRQn);
 
-    g4_rmw(g4_io.rcc, G4_RCC_APB1ENR1_OFFSET, 0u, G4_RCC_APB1ENR1_FDCANEN_Msk);
-    g4_rmw(g4_io.rcc, G4_RCC_CCIPR_OFFSET, G4_RCC_CCIPR_FDCANSEL_Msk,
-           G4_FIELD(G4_RCC_CCIPR_FDCANSEL_PCLK1, G4_RCC_CCIPR_FDCANSEL));
+    RCC_TypeDef *const rcc = g4_io.rcc;
+    FDCAN_GlobalTypeDef *const can = g4_io.fdcan1;
+    SET_BIT(rcc->APB1ENR1, RCC_APB1ENR1_FDCANEN);
+    MODIFY_REG(rcc->CCIPR, RCC_CCIPR_FDCANSEL,
+               _VAL2FLD(RCC_CCIPR_FDCANSEL, G4_RCC_CCIPR_FDCANSEL_PCLK1));
     if (G4_CAN_PINS_PB8_PB9) {
-        g4_rmw(g4_io.rcc, G4_RCC_AHB2ENR_OFFSET, 0u, G4_RCC_AHB2ENR_GPIOBEN_Msk);
-        (void)g4_rd(g4_io.rcc, G4_RCC_AHB2ENR_OFFSET);
+        SET_BIT(rcc->AHB2ENR, RCC_AHB2ENR_GPIOBEN);
+        (void)READ_REG(rcc->AHB2ENR);
         g4_gpio_af(g4_io.gpiob, 8u, G4_GPIO_AF9_FDCAN1);
         g4_gpio_af(g4_io.gpiob, 9u, G4_GPIO_AF9_FDCAN1);
     } else {
-        g4_rmw(g4_io.rcc, G4_RCC_AHB2ENR_OFFSET, 0u, G4_RCC_AHB2ENR_GPIOAEN_Msk);
-        (void)g4_rd(g4_io.rcc, G4_RCC_AHB2ENR_OFFSET);
+        SET_BIT(rcc->AHB2ENR, RCC_AHB2ENR_GPIOAEN);
+        (void)READ_REG(rcc->AHB2ENR);
         g4_gpio_af(g4_io.gpioa, 11u, G4_GPIO_AF9_FDCAN1);
         g4_gpio_af(g4_io.gpioa, 12u, G4_GPIO_AF9_FDCAN1);
     }
@@ -153,19 +153,17 @@ int g4_can_init(uint32_t kernel_hz, uint32_t bitrate_bps)
     rc = enter_init();
     if (rc != PMA_OK) return rc;
     /* classic CAN: no FD frames, no bit rate switch, automatic retransmission */
-    g4_rmw(g4_io.fdcan1, G4_FDCAN1_CCCR_OFFSET,
-           G4_FDCAN1_CCCR_FDOE_Msk | G4_FDCAN1_CCCR_BRSE_Msk | G4_FDCAN1_CCCR_DAR_Msk, 0u);
-    g4_wr(g4_io.fdcan1, G4_FDCAN1_CKDIV_OFFSET, G4_FIELD(0u, G4_FDCAN1_CKDIV_PDIV));
-    g4_wr(g4_io.fdcan1, G4_FDCAN1_NBTP_OFFSET, g4_nbtp_value(&t));
+    CLEAR_BIT(can->CCCR, FDCAN_CCCR_FDOE | FDCAN_CCCR_BRSE | FDCAN_CCCR_DAR);
+    WRITE_REG(g4_io.fdcan_config->CKDIV, _VAL2FLD(FDCAN_CKDIV_PDIV, 0u)); /* kernel clock /1 */
+    WRITE_REG(can->NBTP, g4_nbtp_value(&t));
     for (uint32_t off = 0; off < G4_MRAM_SIZE; off += 4u) mram_wr(off, 0u);
     program_filters(NULL, 0u);
-    g4_wr(g4_io.fdcan1, G4_FDCAN1_TXBC_OFFSET, 0u); /* TFQM 0: FIFO, frames leave in order */
+    WRITE_REG(can->TXBC, 0u); /* TFQM 0: FIFO, frames leave in order */
     /* interrupts: new frame in FIFO 0, FIFO 0 frame lost, Tx FIFO empty; all on line 0 */
-    g4_w1c(g4_io.fdcan1, G4_FDCAN1_IR_OFFSET, 0xFFFFFFu);
-    g4_wr(g4_io.fdcan1, G4_FDCAN1_ILS_OFFSET, 0u);
-    g4_wr(g4_io.fdcan1, G4_FDCAN1_IE_OFFSET,
-          G4_FDCAN1_IE_RF0NE_Msk | G4_FDCAN1_IE_RF0LE_Msk | G4_FDCAN1_IE_TFEE_Msk);
-    g4_wr(g4_io.fdcan1, G4_FDCAN1_ILE_OFFSET, G4_FDCAN1_ILE_EINT0_Msk);
+    g4_w1c(&can->IR, 0xFFFFFFu);
+    WRITE_REG(can->ILS, 0u);
+    WRITE_REG(can->IE, FDCAN_IE_RF0NE | FDCAN_IE_RF0LE | FDCAN_IE_TFEE);
+    WRITE_REG(can->ILE, FDCAN_ILE_EINT0);
 
     rx.head = rx.tail = 0u;
     tx.head = tx.tail = 0u;
@@ -173,15 +171,15 @@ int g4_can_init(uint32_t kernel_hz, uint32_t bitrate_bps)
     rc = leave_init();
     if (rc != PMA_OK) return rc;
     can_up = 1;
-    g4_nvic_enable(G4_IRQ_FDCAN1_IT0, CAN_PRIO);
+    g4_nvic_enable(FDCAN1_IT0_IRQn, CAN_PRIO);
     return PMA_OK;
 }
 
 void g4_can_stop(void)
 {
     can_up = 0;
-    g4_nvic_disable(G4_IRQ_FDCAN1_IT0);
-    g4_rmw(g4_io.fdcan1, G4_FDCAN1_CCCR_OFFSET, 0u, G4_FDCAN1_CCCR_INIT_Msk);
+    g4_nvic_disable(FDCAN1_IT0_IRQn);
+    SET_BIT(g4_io.fdcan1->CCCR, FDCAN_CCCR_INIT);
 }
 
 int g4_can_set_filters(const pma_can_filter_t *filters, size_t count)
@@ -209,12 +207,12 @@ int g4_can_send(const pma_can_frame_t *frame)
     if (frame == NULL) return PMA_ERR_NULL;
     if (!can_up) return PMA_ERR_NOT_READY;
     if (frame->id > PMA_CAN_ID_MAX || frame->dlc > PMA_CAN_DLC_MAX) return PMA_ERR_RANGE;
-    if (g4_rd(g4_io.fdcan1, G4_FDCAN1_PSR_OFFSET) & G4_FDCAN1_PSR_BO_Msk) return PMA_ERR_BUS_OFF;
+    if (READ_BIT(g4_io.fdcan1->PSR, FDCAN_PSR_BO)) return PMA_ERR_BUS_OFF;
     const uint32_t head = tx.head;
     if (head - tx.tail >= G4_CAN_TX_RING) return PMA_ERR_FULL;
     tx.f[head % G4_CAN_TX_RING] = *frame;
     tx.head = head + 1u;
-    g4_nvic_set_pending(G4_IRQ_FDCAN1_IT0); /* the interrupt hands it to the controller */
+    g4_nvic_set_pending(FDCAN1_IT0_IRQn); /* the interrupt hands it to the controller */
     return PMA_OK;
 }
 
@@ -231,17 +229,14 @@ int g4_can_recv(pma_can_frame_t *frame)
 
 static void rx_take(void)
 {
-    const uint32_t fill = G4_GET(g4_rd(g4_io.fdcan1, G4_FDCAN1_RXF0S_OFFSET), G4_FDCAN1_RXF0S_F0FL);
+    FDCAN_GlobalTypeDef *const can = g4_io.fdcan1;
+    const uint32_t fill = _FLD2VAL(FDCAN_RXF0S_F0FL, READ_REG(can->RXF0S));
     /* at most the fill level seen once: each acknowledge frees one element */
     for (uint32_t k = 0; k < fill && k < G4_MRAM_RX_FIFO_ELEMENTS; ++k) {
-        const uint32_t gi =
-            G4_GET(g4_rd(g4_io.fdcan1, G4_FDCAN1_RXF0S_OFFSET), G4_FDCAN1_RXF0S_F0GI);
-        const uint32_t el = G4_MRAM_F0SA + gi * G4_MRAM_ELEMENT_BYTES;
-        const uint32_t r0 = g4_rd(g4_io.mram, el);
-        const uint32_t r1 = g4_rd(g4_io.mram, el + 4u);
-        const uint32_t d0 = g4_rd(g4_io.mram, el + 8u);
-        const uint32_t d1 = g4_rd(g4_io.mram, el + 12u);
-        g4_wr(g4_io.fdcan1, G4_FDCAN1_RXF0A_OFFSET, G4_FIELD(gi, G4_FDCAN1_RXF0A_F0AI));
+        const uint32_t gi = _FLD2VAL(FDCAN_RXF0S_F0GI, READ_REG(can->RXF0S));
+        const volatile uint32_t *el = &g4_io.mram[(G4_MRAM_F0SA + gi * G4_MRAM_ELEMENT_BYTES) / 4u];
+        const uint32_t r0 = el[0], r1 = el[1], d0 = el[2], d1 = el[3];
+        WRITE_REG(can->RXF0A, _VAL2FLD(FDCAN_RXF0A_F0AI, gi));
         if (r0 & (G4_MRAM_W0_XTD | G4_MRAM_W0_RTR)) continue; /* filtered out already */
         if (r1 & G4_MRAM_W1_FDF) continue;                     /* never with FDOE = 0 */
         const uint32_t head = rx.head;
@@ -263,10 +258,10 @@ static void rx_take(void)
 
 static void tx_give(void)
 {
-    const uint32_t txfqs = g4_rd(g4_io.fdcan1, G4_FDCAN1_TXFQS_OFFSET);
-    if (txfqs & G4_FDCAN1_TXFQS_TFQF_Msk) return;
-    const uint32_t free_slots = G4_GET(txfqs, G4_FDCAN1_TXFQS_TFFL);
-    const uint32_t put = G4_GET(txfqs, G4_FDCAN1_TXFQS_TFQPI);
+    const uint32_t txfqs = READ_REG(g4_io.fdcan1->TXFQS);
+    if (txfqs & FDCAN_TXFQS_TFQF) return;
+    const uint32_t free_slots = _FLD2VAL(FDCAN_TXFQS_TFFL, txfqs);
+    const uint32_t put = _FLD2VAL(FDCAN_TXFQS_TFQPI, txfqs);
     uint32_t added = 0u;
     /* the put index advances by one per add request (FIFO mode) */
     for (uint32_t k = 0; k < free_slots && tx.tail != tx.head; ++k) {
@@ -285,16 +280,16 @@ static void tx_give(void)
         added |= 1u << idx;
         tx.tail = tx.tail + 1u;
     }
-    if (added != 0u) g4_wr(g4_io.fdcan1, G4_FDCAN1_TXBAR_OFFSET, added);
+    if (added != 0u) WRITE_REG(g4_io.fdcan1->TXBAR, added);
 }
 
 void g4_can_isr(void)
 {
-    const uint32_t ir = g4_rd(g4_io.fdcan1, G4_FDCAN1_IR_OFFSET);
-    g4_w1c(g4_io.fdcan1, G4_FDCAN1_IR_OFFSET, ir); /* what is handled now */
-    if (ir & G4_FDCAN1_IR_RF0L_Msk) rx_overruns = rx_overruns + 1u; /* the 3-frame FIFO overflowed */
+    const uint32_t ir = READ_REG(g4_io.fdcan1->IR);
+    g4_w1c(&g4_io.fdcan1->IR, ir); /* what is handled now */
+    if (ir & FDCAN_IR_RF0L) rx_overruns = rx_overruns + 1u; /* the 3-frame FIFO overflowed */
     rx_take();
-    if (!(g4_rd(g4_io.fdcan1, G4_FDCAN1_CCCR_OFFSET) & G4_FDCAN1_CCCR_INIT_Msk)) tx_give();
+    if (!READ_BIT(g4_io.fdcan1->CCCR, FDCAN_CCCR_INIT)) tx_give();
 }
 
 /* --------------------------------------------------------------- status -- */
@@ -303,16 +298,16 @@ int g4_can_status(pma_can_status_t *st)
 {
     if (st == NULL) return PMA_ERR_NULL;
     if (!can_up) return PMA_ERR_NOT_READY;
-    const uint32_t ecr = g4_rd(g4_io.fdcan1, G4_FDCAN1_ECR_OFFSET);
-    const uint32_t psr = g4_rd(g4_io.fdcan1, G4_FDCAN1_PSR_OFFSET);
-    st->tec = (uint16_t)G4_GET(ecr, G4_FDCAN1_ECR_TEC);
+    const uint32_t ecr = READ_REG(g4_io.fdcan1->ECR);
+    const uint32_t psr = READ_REG(g4_io.fdcan1->PSR);
+    st->tec = (uint16_t)_FLD2VAL(FDCAN_ECR_TEC, ecr);
     /* REC is 7 bits; RP says it has reached the error-passive level 128 */
-    st->rec = (uint16_t)(G4_GET(ecr, G4_FDCAN1_ECR_REC) | ((ecr & G4_FDCAN1_ECR_RP_Msk) ? 128u : 0u));
+    st->rec = (uint16_t)(_FLD2VAL(FDCAN_ECR_REC, ecr) | ((ecr & FDCAN_ECR_RP) ? 128u : 0u));
     st->rx_overruns = rx_overruns;
-    if (psr & G4_FDCAN1_PSR_BO_Msk) {
+    if (psr & FDCAN_PSR_BO) {
         st->state = PMA_CAN_BUS_OFF;
         st->tec = 256u;
-    } else if (psr & G4_FDCAN1_PSR_EP_Msk) {
+    } else if (psr & FDCAN_PSR_EP) {
         st->state = PMA_CAN_ERROR_PASSIVE;
     } else {
         st->state = PMA_CAN_ERROR_ACTIVE;
@@ -323,9 +318,9 @@ int g4_can_status(pma_can_status_t *st)
 int g4_can_recover(void)
 {
     if (!can_up) return PMA_ERR_NOT_READY;
-    if (!(g4_rd(g4_io.fdcan1, G4_FDCAN1_PSR_OFFSET) & G4_FDCAN1_PSR_BO_Msk)) return PMA_OK;
+    if (!READ_BIT(g4_io.fdcan1->PSR, FDCAN_PSR_BO)) return PMA_OK;
     /* the controller set INIT when it went bus-off; clearing it starts the
      * recovery sequence. Frames still in the TX ring are kept. */
-    g4_rmw(g4_io.fdcan1, G4_FDCAN1_CCCR_OFFSET, G4_FDCAN1_CCCR_CCE_Msk | G4_FDCAN1_CCCR_INIT_Msk, 0u);
+    CLEAR_BIT(g4_io.fdcan1->CCCR, FDCAN_CCCR_CCE | FDCAN_CCCR_INIT);
     return PMA_OK;
 }

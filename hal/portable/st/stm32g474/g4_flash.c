@@ -16,11 +16,9 @@
 
 #include <string.h>
 
-#define SR_ERRORS                                                                             \
-    (G4_FLASH_SR_OPERR_Msk | G4_FLASH_SR_PROGERR_Msk | G4_FLASH_SR_WRPERR_Msk |               \
-     G4_FLASH_SR_PGAERR_Msk | G4_FLASH_SR_SIZERR_Msk | G4_FLASH_SR_PGSERR_Msk |               \
-     G4_FLASH_SR_MISERR_Msk | G4_FLASH_SR_FASTERR_Msk | G4_FLASH_SR_RDERR_Msk |               \
-     G4_FLASH_SR_OPTVERR_Msk)
+#define SR_ERRORS                                                                          \
+    (FLASH_SR_OPERR | FLASH_SR_PROGERR | FLASH_SR_WRPERR | FLASH_SR_PGAERR | FLASH_SR_SIZERR | \
+     FLASH_SR_PGSERR | FLASH_SR_MISERR | FLASH_SR_FASTERR | FLASH_SR_RDERR | FLASH_SR_OPTVERR)
 #define BLOCKS 2u
 #define PROGRAM_BYTES 8u
 
@@ -28,7 +26,7 @@ static volatile uint8_t ecc_double_error; /* set by the NMI handler */
 
 static int dual_bank(void)
 {
-    return (g4_rd(g4_io.flash, G4_FLASH_OPTR_OFFSET) & G4_FLASH_OPTR_DBANK_BIT) != 0u;
+    return READ_BIT(g4_io.flash->OPTR, FLASH_OPTR_DBANK) != 0u;
 }
 
 static uint32_t page_bytes(void)
@@ -57,10 +55,10 @@ static int in_block(uint32_t block, uint32_t offset, uint32_t len)
 
 int g4_flash_nmi(void)
 {
-    const uint32_t eccr = g4_rd(g4_io.flash, G4_FLASH_ECCR_OFFSET);
-    if (!(eccr & G4_FLASH_ECCR_ECCD_Msk)) return 0;
+    const uint32_t eccr = READ_REG(g4_io.flash->ECCR);
+    if (!(eccr & FLASH_ECCR_ECCD)) return 0;
     ecc_double_error = 1;
-    g4_w1c(g4_io.flash, G4_FLASH_ECCR_OFFSET, G4_FLASH_ECCR_ECCD_Msk);
+    g4_w1c(&g4_io.flash->ECCR, FLASH_ECCR_ECCD);
     return 1;
 }
 
@@ -74,7 +72,7 @@ int g4_flash_read(uint32_t block, uint32_t offset, void *buf, uint32_t len)
     for (uint32_t i = 0; i < len; ++i) dst[i] = src[i];
     /* the NMI ran during a load above, or ECCD is set without it (NMI
      * taken elsewhere first): either way, this range is not to be trusted */
-    if (ecc_double_error || (g4_rd(g4_io.flash, G4_FLASH_ECCR_OFFSET) & G4_FLASH_ECCR_ECCD_Msk)) {
+    if (ecc_double_error || READ_BIT(g4_io.flash->ECCR, FLASH_ECCR_ECCD)) {
         (void)g4_flash_nmi();
         ecc_double_error = 0;
         return PMA_ERR_CORRUPT;
@@ -84,43 +82,40 @@ int g4_flash_read(uint32_t block, uint32_t offset, void *buf, uint32_t len)
 
 static int unlock(void)
 {
-    if (g4_wait(g4_io.flash, G4_FLASH_SR_OFFSET, G4_FLASH_SR_BSY_Msk, 0u, G4_POLLS_LONG) != 0) {
-        return PMA_ERR_IO;
-    }
-    if (g4_rd(g4_io.flash, G4_FLASH_CR_OFFSET) & G4_FLASH_CR_LOCK_Msk) {
-        g4_wr(g4_io.flash, G4_FLASH_KEYR_OFFSET, G4_FLASH_KEY1);
-        g4_wr(g4_io.flash, G4_FLASH_KEYR_OFFSET, G4_FLASH_KEY2);
+    FLASH_TypeDef *const flash = g4_io.flash;
+    if (g4_wait(&flash->SR, FLASH_SR_BSY, 0u, G4_POLLS_LONG) != 0) return PMA_ERR_IO;
+    if (READ_BIT(flash->CR, FLASH_CR_LOCK)) {
+        WRITE_REG(flash->KEYR, G4_FLASH_KEY1);
+        WRITE_REG(flash->KEYR, G4_FLASH_KEY2);
         /* a wrong sequence keeps it locked until reset */
-        if (g4_wait(g4_io.flash, G4_FLASH_CR_OFFSET, G4_FLASH_CR_LOCK_Msk, 0u, 1u) != 0) {
-            return PMA_ERR_IO;
-        }
+        if (g4_wait(&flash->CR, FLASH_CR_LOCK, 0u, 1u) != 0) return PMA_ERR_IO;
     }
     /* errors left by an earlier operation would refuse this one (PGSERR) */
-    g4_w1c(g4_io.flash, G4_FLASH_SR_OFFSET, SR_ERRORS | G4_FLASH_SR_EOP_Msk);
+    g4_w1c(&flash->SR, SR_ERRORS | FLASH_SR_EOP);
     return PMA_OK;
 }
 
 static void lock(void)
 {
-    g4_wr(g4_io.flash, G4_FLASH_CR_OFFSET, G4_FLASH_CR_LOCK_Msk);
+    WRITE_REG(g4_io.flash->CR, FLASH_CR_LOCK);
 }
 
 /* Flushes the data cache so reads see the new contents. */
 static void flush_dcache(void)
 {
-    g4_rmw(g4_io.flash, G4_FLASH_ACR_OFFSET, G4_FLASH_ACR_DCEN_Msk, 0u);
-    g4_rmw(g4_io.flash, G4_FLASH_ACR_OFFSET, 0u, G4_FLASH_ACR_DCRST_Msk);
-    g4_rmw(g4_io.flash, G4_FLASH_ACR_OFFSET, G4_FLASH_ACR_DCRST_Msk, G4_FLASH_ACR_DCEN_Msk);
+    FLASH_TypeDef *const flash = g4_io.flash;
+    CLEAR_BIT(flash->ACR, FLASH_ACR_DCEN);
+    SET_BIT(flash->ACR, FLASH_ACR_DCRST);
+    MODIFY_REG(flash->ACR, FLASH_ACR_DCRST, FLASH_ACR_DCEN);
 }
 
 /* Waits for the end of an operation; PMA_ERR_IO on a timeout or an error flag. */
 static int finish(void)
 {
-    if (g4_wait(g4_io.flash, G4_FLASH_SR_OFFSET, G4_FLASH_SR_BSY_Msk, 0u, G4_POLLS_LONG) != 0) {
-        return PMA_ERR_IO;
-    }
-    const uint32_t sr = g4_rd(g4_io.flash, G4_FLASH_SR_OFFSET);
-    g4_w1c(g4_io.flash, G4_FLASH_SR_OFFSET, sr & (SR_ERRORS | G4_FLASH_SR_EOP_Msk));
+    FLASH_TypeDef *const flash = g4_io.flash;
+    if (g4_wait(&flash->SR, FLASH_SR_BSY, 0u, G4_POLLS_LONG) != 0) return PMA_ERR_IO;
+    const uint32_t sr = READ_REG(flash->SR);
+    g4_w1c(&flash->SR, sr & (SR_ERRORS | FLASH_SR_EOP));
     return (sr & SR_ERRORS) ? PMA_ERR_IO : PMA_OK;
 }
 
@@ -129,12 +124,12 @@ int g4_flash_erase(uint32_t block)
     if (block >= BLOCKS) return PMA_ERR_RANGE;
     int rc = unlock();
     if (rc != PMA_OK) return rc;
-    const uint32_t cr = G4_FLASH_CR_PER_Msk | G4_FIELD(G4_NVM_FIRST_PAGE + block, G4_FLASH_CR_PNB) |
-                        (dual_bank() ? G4_FLASH_CR_BKER_BIT : 0u); /* bank 2 */
-    g4_wr(g4_io.flash, G4_FLASH_CR_OFFSET, cr);
-    g4_wr(g4_io.flash, G4_FLASH_CR_OFFSET, cr | G4_FLASH_CR_STRT_Msk);
+    const uint32_t cr = FLASH_CR_PER | _VAL2FLD(FLASH_CR_PNB, G4_NVM_FIRST_PAGE + block) |
+                        (dual_bank() ? FLASH_CR_BKER : 0u); /* bank 2 */
+    WRITE_REG(g4_io.flash->CR, cr);
+    WRITE_REG(g4_io.flash->CR, cr | FLASH_CR_STRT);
     rc = finish();
-    g4_wr(g4_io.flash, G4_FLASH_CR_OFFSET, 0u);
+    WRITE_REG(g4_io.flash->CR, 0u);
     lock();
     flush_dcache();
     return rc;
@@ -152,7 +147,7 @@ int g4_flash_program(uint32_t block, uint32_t offset, const void *data, uint32_t
     }
     int rc = unlock();
     if (rc != PMA_OK) return rc;
-    g4_wr(g4_io.flash, G4_FLASH_CR_OFFSET, G4_FLASH_CR_PG_Msk);
+    WRITE_REG(g4_io.flash->CR, FLASH_CR_PG);
     const uint8_t *src = data;
     for (uint32_t i = 0; i < len && rc == PMA_OK; i += PROGRAM_BYTES) {
         uint32_t w[2];
@@ -162,7 +157,7 @@ int g4_flash_program(uint32_t block, uint32_t offset, const void *data, uint32_t
         *(volatile uint32_t *)(base + i + 4u) = w[1];
         rc = finish();
     }
-    g4_wr(g4_io.flash, G4_FLASH_CR_OFFSET, 0u);
+    WRITE_REG(g4_io.flash->CR, 0u);
     lock();
     flush_dcache();
     return rc;

@@ -1,42 +1,44 @@
-/* Base addresses of the registers (g4_io.h) and the NVIC helpers. */
+/* The register blocks (g4_io.h) and the NVIC helpers. */
 #include "g4_drivers.h" /* G4_NVM_BASE */
 
-g4_io_t g4_io = {
-    .rcc = G4_RCC_BASE, .pwr = G4_PWR_BASE, .flash = G4_FLASH_BASE, .gpioa = G4_GPIOA_BASE,
-    .gpiob = G4_GPIOB_BASE, .tim2 = G4_TIM2_BASE, .tim6 = G4_TIM6_BASE, .adc1 = G4_ADC1_BASE,
-    .adc12_common = G4_ADC12_COMMON_BASE, .dac1 = G4_DAC1_BASE, .fdcan1 = G4_FDCAN1_BASE,
-    .mram = G4_MRAM_BASE, .iwdg = G4_IWDG_BASE, .dbgmcu = G4_DBGMCU_BASE, .nvic = G4_NVIC_BASE,
-    .nvm = G4_NVM_BASE,
-};
+/* ST's base addresses (stm32g474xx.h; SRAMCAN_BASE: FDCAN1's message RAM comes first) */
+#define G4_IO_HARDWARE                                                                         \
+    {                                                                                          \
+        .rcc = RCC, .pwr = PWR, .flash = FLASH, .gpioa = GPIOA, .gpiob = GPIOB, .tim2 = TIM2,  \
+        .tim6 = TIM6, .adc1 = ADC1, .adc12_common = ADC12_COMMON, .dac1 = DAC1,                \
+        .fdcan1 = FDCAN1, .fdcan_config = FDCAN_CONFIG,                                        \
+        .mram = (volatile uint32_t *)SRAMCAN_BASE, .iwdg = IWDG, .nvic = NVIC,                 \
+        .nvm = G4_NVM_BASE,                                                                    \
+    }
+
+g4_io_t g4_io = G4_IO_HARDWARE;
 
 void g4_io_use_hardware(void)
 {
-    const g4_io_t hw = {
-        .rcc = G4_RCC_BASE, .pwr = G4_PWR_BASE, .flash = G4_FLASH_BASE, .gpioa = G4_GPIOA_BASE,
-        .gpiob = G4_GPIOB_BASE, .tim2 = G4_TIM2_BASE, .tim6 = G4_TIM6_BASE, .adc1 = G4_ADC1_BASE,
-        .adc12_common = G4_ADC12_COMMON_BASE, .dac1 = G4_DAC1_BASE, .fdcan1 = G4_FDCAN1_BASE,
-        .mram = G4_MRAM_BASE, .iwdg = G4_IWDG_BASE, .dbgmcu = G4_DBGMCU_BASE,
-        .nvic = G4_NVIC_BASE, .nvm = G4_NVM_BASE,
-    };
+    const g4_io_t hw = G4_IO_HARDWARE;
     g4_io = hw;
 }
 
-/* NVIC: ISERn/ICERn/ISPRn hold 32 interrupts each; IPRn one byte per
- * interrupt, of which the G4 implements the upper 4 bits. */
-void g4_nvic_enable(uint32_t irq, uint8_t priority)
+/* NVIC: what CMSIS-Core's NVIC_SetPriority / NVIC_EnableIRQ / NVIC_DisableIRQ /
+ * NVIC_SetPendingIRQ do, but through g4_io.nvic instead of the fixed NVIC
+ * address, so that the host test sees the writes. ISER/ICER/ISPR hold 32
+ * interrupts per word; IPR one byte per interrupt, of which the G4
+ * implements the upper __NVIC_PRIO_BITS (4). */
+void g4_nvic_enable(IRQn_Type irq, uint8_t priority)
 {
-    const uint32_t ipr = G4_NVIC_IPR0_OFFSET + (irq & ~3u);
-    const uint32_t shift = 8u * (irq & 3u);
-    g4_rmw(g4_io.nvic, ipr, 0xFFu << shift, (uint32_t)(uint8_t)(priority << 4) << shift);
-    g4_wr(g4_io.nvic, G4_NVIC_ISER0_OFFSET + 4u * (irq / 32u), 1u << (irq % 32u));
+    const uint32_t n = (uint32_t)irq;
+    g4_io.nvic->IPR[n] = (uint8_t)(priority << (8u - __NVIC_PRIO_BITS));
+    g4_io.nvic->ISER[n / 32u] = 1u << (n % 32u);
 }
 
-void g4_nvic_disable(uint32_t irq)
+void g4_nvic_disable(IRQn_Type irq)
 {
-    g4_wr(g4_io.nvic, G4_NVIC_ICER0_OFFSET + 4u * (irq / 32u), 1u << (irq % 32u));
+    const uint32_t n = (uint32_t)irq;
+    g4_io.nvic->ICER[n / 32u] = 1u << (n % 32u);
 }
 
-void g4_nvic_set_pending(uint32_t irq)
+void g4_nvic_set_pending(IRQn_Type irq)
 {
-    g4_wr(g4_io.nvic, G4_NVIC_ISPR0_OFFSET + 4u * (irq / 32u), 1u << (irq % 32u));
+    const uint32_t n = (uint32_t)irq;
+    g4_io.nvic->ISPR[n / 32u] = 1u << (n % 32u);
 }

@@ -28,20 +28,20 @@ int g4_iwdg_start(uint32_t timeout_ms)
     g4_iwdg_regs_t r;
     const int rc = g4_iwdg_config(timeout_ms, &r);
     if (rc != PMA_OK) return rc;
-    g4_wr(g4_io.iwdg, G4_IWDG_KR_OFFSET, G4_IWDG_KEY_START); /* starts the LSI too */
-    g4_wr(g4_io.iwdg, G4_IWDG_KR_OFFSET, G4_IWDG_KEY_ACCESS);
-    g4_wr(g4_io.iwdg, G4_IWDG_PR_OFFSET, G4_FIELD(r.pr, G4_IWDG_PR_PR));
-    g4_wr(g4_io.iwdg, G4_IWDG_RLR_OFFSET, G4_FIELD(r.rlr, G4_IWDG_RLR_RL));
+    IWDG_TypeDef *const iwdg = g4_io.iwdg;
+    WRITE_REG(iwdg->KR, G4_IWDG_KEY_START); /* starts the LSI too */
+    WRITE_REG(iwdg->KR, G4_IWDG_KEY_ACCESS);
+    WRITE_REG(iwdg->PR, _VAL2FLD(IWDG_PR_PR, r.pr));
+    WRITE_REG(iwdg->RLR, _VAL2FLD(IWDG_RLR_RL, r.rlr));
     /* the new values cross into the LSI domain: wait (bounded) until taken */
-    const int ok = g4_wait(g4_io.iwdg, G4_IWDG_SR_OFFSET,
-                           G4_IWDG_SR_PVU_Msk | G4_IWDG_SR_RVU_Msk | G4_IWDG_SR_WVU_Msk, 0u,
-                           G4_POLLS_LONG);
-    g4_wr(g4_io.iwdg, G4_IWDG_KR_OFFSET, G4_IWDG_KEY_RELOAD);
+    const int ok =
+        g4_wait(&iwdg->SR, IWDG_SR_PVU | IWDG_SR_RVU | IWDG_SR_WVU, 0u, G4_POLLS_LONG);
+    WRITE_REG(iwdg->KR, G4_IWDG_KEY_RELOAD);
     iwdg_started = 1;
     return ok == 0 ? PMA_OK : PMA_ERR_IO;
 }
 
 void g4_iwdg_kick(void)
 {
-    if (iwdg_started) g4_wr(g4_io.iwdg, G4_IWDG_KR_OFFSET, G4_IWDG_KEY_RELOAD);
+    if (iwdg_started) WRITE_REG(g4_io.iwdg->KR, G4_IWDG_KEY_RELOAD);
 }

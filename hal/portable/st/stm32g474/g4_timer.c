@@ -19,25 +19,26 @@ static uint32_t psc_for_1mhz(uint32_t timclk_hz)
 
 void g4_time_init(uint32_t timclk_hz)
 {
-    g4_rmw(g4_io.rcc, G4_RCC_APB1ENR1_OFFSET, 0u, G4_RCC_APB1ENR1_TIM2EN_Msk);
-    (void)g4_rd(g4_io.rcc, G4_RCC_APB1ENR1_OFFSET);
-    g4_wr(g4_io.tim2, G4_TIM2_CR1_OFFSET, 0u);
-    g4_wr(g4_io.tim2, G4_TIM2_PSC_OFFSET, G4_FIELD(psc_for_1mhz(timclk_hz), G4_TIM2_PSC_PSC));
-    g4_wr(g4_io.tim2, G4_TIM2_ARR_OFFSET, 0xFFFFFFFFu);
+    TIM_TypeDef *const tim = g4_io.tim2;
+    SET_BIT(g4_io.rcc->APB1ENR1, RCC_APB1ENR1_TIM2EN);
+    (void)READ_REG(g4_io.rcc->APB1ENR1);
+    WRITE_REG(tim->CR1, 0u);
+    WRITE_REG(tim->PSC, _VAL2FLD(TIM_PSC_PSC, psc_for_1mhz(timclk_hz)));
+    WRITE_REG(tim->ARR, 0xFFFFFFFFu); /* TIM2's counter is 32 bits */
     /* URS: only an overflow raises UIF, not the UG that loads the prescaler */
-    g4_wr(g4_io.tim2, G4_TIM2_CR1_OFFSET, G4_TIM2_CR1_URS_Msk);
-    g4_wr(g4_io.tim2, G4_TIM2_EGR_OFFSET, G4_TIM2_EGR_UG_Msk);
-    g4_wr(g4_io.tim2, G4_TIM2_SR_OFFSET, 0u);
-    g4_wr(g4_io.tim2, G4_TIM2_DIER_OFFSET, G4_TIM2_DIER_UIE_Msk);
+    WRITE_REG(tim->CR1, TIM_CR1_URS);
+    WRITE_REG(tim->EGR, TIM_EGR_UG);
+    WRITE_REG(tim->SR, 0u);
+    WRITE_REG(tim->DIER, TIM_DIER_UIE);
     tim2_wraps = 0;
-    g4_nvic_enable(G4_IRQ_TIM2, TIM_PRIO);
-    g4_wr(g4_io.tim2, G4_TIM2_CR1_OFFSET, G4_TIM2_CR1_URS_Msk | G4_TIM2_CR1_CEN_Msk);
+    g4_nvic_enable(TIM2_IRQn, TIM_PRIO);
+    WRITE_REG(tim->CR1, TIM_CR1_URS | TIM_CR1_CEN);
 }
 
 void g4_time_isr(void)
 {
-    if (g4_rd(g4_io.tim2, G4_TIM2_SR_OFFSET) & G4_TIM2_SR_UIF_Msk) {
-        g4_wr(g4_io.tim2, G4_TIM2_SR_OFFSET, ~G4_TIM2_SR_UIF_Msk); /* rc_w0: write 0 clears */
+    if (READ_BIT(g4_io.tim2->SR, TIM_SR_UIF)) {
+        WRITE_REG(g4_io.tim2->SR, ~(uint32_t)TIM_SR_UIF); /* rc_w0: write 0 clears */
         tim2_wraps = tim2_wraps + 1u;
     }
 }
@@ -47,8 +48,8 @@ uint64_t g4_time_us(void)
     uint32_t hi, lo, pending;
     do {
         hi = tim2_wraps;
-        lo = g4_rd(g4_io.tim2, G4_TIM2_CNT_OFFSET);
-        pending = g4_rd(g4_io.tim2, G4_TIM2_SR_OFFSET) & G4_TIM2_SR_UIF_Msk;
+        lo = READ_REG(g4_io.tim2->CNT);
+        pending = READ_BIT(g4_io.tim2->SR, TIM_SR_UIF);
     } while (hi != tim2_wraps);
     /* the counter wrapped but its interrupt has not run yet (called with a
      * higher priority or interrupts masked): a small count belongs to the
@@ -74,36 +75,36 @@ int g4_tick_start(uint32_t timclk_hz, uint32_t period_us)
     g4_tick_regs_t r;
     const int rc = g4_tick_config(timclk_hz, period_us, &r);
     if (rc != PMA_OK) return rc;
-    g4_rmw(g4_io.rcc, G4_RCC_APB1ENR1_OFFSET, 0u, G4_RCC_APB1ENR1_TIM6EN_Msk);
-    (void)g4_rd(g4_io.rcc, G4_RCC_APB1ENR1_OFFSET);
-    g4_wr(g4_io.tim6, G4_TIM6_CR1_OFFSET, 0u);
-    g4_wr(g4_io.tim6, G4_TIM6_DIER_OFFSET, 0u);
-    g4_wr(g4_io.tim6, G4_TIM6_PSC_OFFSET, G4_FIELD(r.psc, G4_TIM6_PSC_PSC));
-    g4_wr(g4_io.tim6, G4_TIM6_ARR_OFFSET, G4_FIELD(r.arr, G4_TIM6_ARR_ARR));
-    g4_wr(g4_io.tim6, G4_TIM6_CR1_OFFSET, G4_TIM6_CR1_URS_Msk | G4_TIM6_CR1_ARPE_Msk);
-    g4_wr(g4_io.tim6, G4_TIM6_EGR_OFFSET, G4_TIM6_EGR_UG_Msk); /* load PSC, counter to 0 */
-    g4_wr(g4_io.tim6, G4_TIM6_SR_OFFSET, 0u);
+    TIM_TypeDef *const tim = g4_io.tim6;
+    SET_BIT(g4_io.rcc->APB1ENR1, RCC_APB1ENR1_TIM6EN);
+    (void)READ_REG(g4_io.rcc->APB1ENR1);
+    WRITE_REG(tim->CR1, 0u);
+    WRITE_REG(tim->DIER, 0u);
+    WRITE_REG(tim->PSC, _VAL2FLD(TIM_PSC_PSC, r.psc));
+    WRITE_REG(tim->ARR, r.arr); /* <= 0xFFFF (g4_tick_config): TIM6 is a 16-bit timer */
+    WRITE_REG(tim->CR1, TIM_CR1_URS | TIM_CR1_ARPE);
+    WRITE_REG(tim->EGR, TIM_EGR_UG); /* load PSC, counter to 0 */
+    WRITE_REG(tim->SR, 0u);
     ticks_served = ticks;                  /* the first tick falls one period from now */
     tick_running = 1;
-    g4_wr(g4_io.tim6, G4_TIM6_DIER_OFFSET, G4_TIM6_DIER_UIE_Msk);
-    g4_nvic_enable(G4_IRQ_TIM6_DACUNDER, TIM_PRIO);
-    g4_wr(g4_io.tim6, G4_TIM6_CR1_OFFSET,
-          G4_TIM6_CR1_URS_Msk | G4_TIM6_CR1_ARPE_Msk | G4_TIM6_CR1_CEN_Msk);
+    WRITE_REG(tim->DIER, TIM_DIER_UIE);
+    g4_nvic_enable(TIM6_DAC_IRQn, TIM_PRIO);
+    WRITE_REG(tim->CR1, TIM_CR1_URS | TIM_CR1_ARPE | TIM_CR1_CEN);
     return PMA_OK;
 }
 
 void g4_tick_stop(void)
 {
-    g4_wr(g4_io.tim6, G4_TIM6_CR1_OFFSET, 0u);
-    g4_wr(g4_io.tim6, G4_TIM6_DIER_OFFSET, 0u);
-    g4_nvic_disable(G4_IRQ_TIM6_DACUNDER);
+    WRITE_REG(g4_io.tim6->CR1, 0u);
+    WRITE_REG(g4_io.tim6->DIER, 0u);
+    g4_nvic_disable(TIM6_DAC_IRQn);
     tick_running = 0;
 }
 
 void g4_tick_isr(void)
 {
-    if (g4_rd(g4_io.tim6, G4_TIM6_SR_OFFSET) & G4_TIM6_SR_UIF_Msk) {
-        g4_wr(g4_io.tim6, G4_TIM6_SR_OFFSET, ~G4_TIM6_SR_UIF_Msk);
+    if (READ_BIT(g4_io.tim6->SR, TIM_SR_UIF)) {
+        WRITE_REG(g4_io.tim6->SR, ~(uint32_t)TIM_SR_UIF);
         ticks = ticks + 1u;
     }
 }

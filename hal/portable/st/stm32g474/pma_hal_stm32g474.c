@@ -17,8 +17,8 @@ void pma_hal_stm32g474_system_init(void)
     clock_source = g4_clock_init(G4_HSE_HZ != 0u); /* HSE 0: HSI16 only */
     g4_time_init(g4_clock_sysclk_hz());
     /* the LED pin, so that the board can signal even when init fails */
-    g4_rmw(g4_io.rcc, G4_RCC_AHB2ENR_OFFSET, 0u, G4_RCC_AHB2ENR_GPIOAEN_Msk);
-    (void)g4_rd(g4_io.rcc, G4_RCC_AHB2ENR_OFFSET);
+    SET_BIT(g4_io.rcc->AHB2ENR, RCC_AHB2ENR_GPIOAEN);
+    (void)READ_REG(g4_io.rcc->AHB2ENR);
     g4_gpio_write(g4_io.gpioa, G4_LED_PIN, 0);
     g4_gpio_mode(g4_io.gpioa, G4_LED_PIN, G4_GPIO_MODE_OUTPUT);
 }

@@ -17,12 +17,12 @@ void Default_Handler(void);
 
 void Reset_Handler(void)
 {
-    /* FPU first (CP10/CP11 full access): the compiler may use FP registers
-     * anywhere in hard-float code. A constant address: g4_io is in .data,
-     * which is not copied yet. */
-    *(volatile uint32_t *)(G4_FPU_CPACR_BASE + G4_FPU_CPACR_CPACR_OFFSET) |=
-        G4_FPU_CPACR_CPACR_CP_Msk;
-    __asm volatile("dsb\n\tisb" ::: "memory");
+    /* FPU first (CP10/CP11 full access, PM0214 4.6.1): the compiler may use
+     * FP registers anywhere in hard-float code. CMSIS-Core's SCB, a constant
+     * address: g4_io is in .data, which is not copied yet. */
+    SCB->CPACR |= (3u << 20) | (3u << 22);
+    __DSB();
+    __ISB();
     uint32_t *src = &_sidata;
     for (uint32_t *dst = &_sdata; dst < &_edata;) *dst++ = *src++;
     for (uint32_t *dst = &_sbss; dst < &_ebss;) *dst++ = 0u;
@@ -74,7 +74,7 @@ typedef void (*vector_t)(void);
  * listed: an interrupt the port never enables lands in Default_Handler). */
 #define D Default_Handler
 _Static_assert(G4_IRQ_COUNT == 102u, "the table below lists 102 interrupt lines");
-_Static_assert(G4_IRQ_FDCAN1_IT0 == 21u && G4_IRQ_TIM2 == 28u && G4_IRQ_TIM6_DACUNDER == 54u,
+_Static_assert(FDCAN1_IT0_IRQn == 21 && TIM2_IRQn == 28 && TIM6_DAC_IRQn == 54,
                "the handlers below sit at these lines");
 __attribute__((section(".isr_vector"), used)) static const vector_t vectors[16 + G4_IRQ_COUNT] = {
     (vector_t)(uintptr_t)&_estack, Reset_Handler, NMI_Handler, HardFault_Handler,
