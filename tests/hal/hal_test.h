@@ -1,24 +1,12 @@
-/* Shared helpers of the HAL, fake-port and storage tests (cmocka). */
+/* Shared header of the HAL, fake-port and storage tests: the project's test
+ * support (Unity and assert_status, tests/support/pma_test.h) and the
+ * declaration of pma_status_name() that assert_status prints with. */
 #ifndef PMA_HAL_TEST_H
 #define PMA_HAL_TEST_H
 
-#include <stdarg.h>
-#include <stddef.h>
-#include <setjmp.h>
 #include <stdint.h>
-#include <cmocka.h>
 
 #include "pma/status.h"
-
-/* Compares status codes and prints their names on a mismatch. */
-#define assert_status(got, want)                                                         \
-    do {                                                                                  \
-        const int g_ = (got), w_ = (want);                                                \
-        if (g_ != w_) {                                                                   \
-            print_error("%s = %s (%d), expected %s (%d)\n", #got, pma_status_name(g_),    \
-                        g_, pma_status_name(w_), w_);                                     \
-            fail();                                                                       \
-        }                                                                                 \
-    } while (0)
+#include "pma_test.h"
 
 #endif /* PMA_HAL_TEST_H */

@@ -17,29 +17,26 @@ static uint32_t crc32_bitwise(const uint8_t *p, size_t n)
     return ~c;
 }
 
-static void test_check_value(void **state)
+static void test_check_value(void)
 {
-    (void)state;
-    assert_int_equal(pma_crc32("123456789", 9), 0xCBF43926u);
-    assert_int_equal(PMA_CRC32_CHECK, 0xCBF43926u);
-    assert_int_equal(pma_crc32("", 0), 0u);
+    TEST_ASSERT_EQUAL_HEX32(0xCBF43926u, pma_crc32("123456789", 9));
+    TEST_ASSERT_EQUAL_HEX32(0xCBF43926u, PMA_CRC32_CHECK);
+    TEST_ASSERT_EQUAL_HEX32(0u, pma_crc32("", 0));
     const char *fox = "The quick brown fox jumps over the lazy dog";
-    assert_int_equal(pma_crc32(fox, strlen(fox)), 0x414FA339u);
+    TEST_ASSERT_EQUAL_HEX32(0x414FA339u, pma_crc32(fox, strlen(fox)));
 }
 
-static void test_chaining(void **state)
+static void test_chaining(void)
 {
-    (void)state;
     const char *s = "123456789";
     for (size_t cut = 0; cut <= 9; ++cut) {
         const uint32_t c = pma_crc32_update(pma_crc32_update(0u, s, cut), s + cut, 9 - cut);
-        assert_int_equal(c, 0xCBF43926u);
+        TEST_ASSERT_EQUAL_HEX32(0xCBF43926u, c);
     }
 }
 
-static void test_matches_bitwise(void **state)
+static void test_matches_bitwise(void)
 {
-    (void)state;
     static uint8_t buf[300];
     uint32_t x = 0x12345678u;
     for (size_t i = 0; i < sizeof buf; ++i) {
@@ -47,23 +44,22 @@ static void test_matches_bitwise(void **state)
         buf[i] = (uint8_t)(x >> 24);
     }
     for (size_t n = 0; n <= sizeof buf; n += 13) {
-        assert_int_equal(pma_crc32(buf, n), crc32_bitwise(buf, n));
+        TEST_ASSERT_EQUAL_HEX32(crc32_bitwise(buf, n), pma_crc32(buf, n));
     }
     /* every single-bit flip changes the CRC */
     const uint32_t ref = pma_crc32(buf, 64);
     for (size_t bit = 0; bit < 64 * 8; ++bit) {
         buf[bit / 8] ^= (uint8_t)(1u << (bit % 8));
-        assert_true(pma_crc32(buf, 64) != ref);
+        TEST_ASSERT_NOT_EQUAL_HEX32(ref, pma_crc32(buf, 64));
         buf[bit / 8] ^= (uint8_t)(1u << (bit % 8));
     }
 }
 
 int main(void)
 {
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_check_value),
-        cmocka_unit_test(test_chaining),
-        cmocka_unit_test(test_matches_bitwise),
-    };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    UNITY_BEGIN();
+    RUN_TEST(test_check_value);
+    RUN_TEST(test_chaining);
+    RUN_TEST(test_matches_bitwise);
+    return UNITY_END();
 }

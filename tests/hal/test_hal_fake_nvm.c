@@ -16,13 +16,13 @@ static uint8_t mem[BLOCK * BLOCKS];
 static const pma_nvm_geometry_t geo = {.block_size = BLOCK, .block_count = BLOCKS,
                                        .program_size = PROG};
 
-static int setup(void **state)
+/* Every test: fresh devices, HAL up, `mem` attached as the NVM. */
+void setUp(void)
 {
-    (void)state;
     pma_fake_reset();
-    if (pma_hal_init(NULL) != PMA_OK) return -1;
+    assert_status(pma_hal_init(NULL), PMA_OK);
     memset(mem, 0x5A, sizeof mem); /* attach must erase this */
-    return pma_fake_nvm_attach(mem, sizeof mem, &geo) == PMA_OK ? 0 : -1;
+    assert_status(pma_fake_nvm_attach(mem, sizeof mem, &geo), PMA_OK);
 }
 
 static bool all_equal(const uint8_t *p, size_t n, uint8_t v)
@@ -33,13 +33,12 @@ static bool all_equal(const uint8_t *p, size_t n, uint8_t v)
     return true;
 }
 
-static void test_attach_and_geometry(void **state)
+static void test_attach_and_geometry(void)
 {
-    (void)state;
     pma_nvm_geometry_t g;
     assert_status(pma_hal_nvm_geometry(&g), PMA_OK);
-    assert_memory_equal(&g, &geo, sizeof g);
-    assert_true(all_equal(mem, sizeof mem, 0xFF));
+    TEST_ASSERT_EQUAL_MEMORY(&geo, &g, sizeof g);
+    TEST_ASSERT_TRUE(all_equal(mem, sizeof mem, 0xFF));
 
     pma_fake_reset();
     assert_status(pma_hal_init(NULL), PMA_OK);
@@ -57,18 +56,18 @@ static void test_attach_and_geometry(void **state)
     assert_status(pma_hal_nvm_geometry(NULL), PMA_ERR_NULL);
 }
 
-static void test_flash_semantics(void **state)
+static void test_flash_semantics(void)
 {
-    (void)state;
     uint8_t data[16], back[16];
     for (unsigned i = 0; i < sizeof data; ++i) data[i] = (uint8_t)(0x10u + i);
     assert_status(pma_hal_nvm_program(1, 8, data, 16), PMA_OK);
     assert_status(pma_hal_nvm_read(1, 8, back, 16), PMA_OK);
-    assert_memory_equal(back, data, 16);
-    assert_true(all_equal(mem + BLOCK, 8, 0xFF) && all_equal(mem + BLOCK + 24, BLOCK - 24, 0xFF));
+    TEST_ASSERT_EQUAL_MEMORY(data, back, 16);
+    TEST_ASSERT_TRUE(all_equal(mem + BLOCK, 8, 0xFF) &&
+                     all_equal(mem + BLOCK + 24, BLOCK - 24, 0xFF));
     /* unaligned reads are fine; unaligned programs are not */
     assert_status(pma_hal_nvm_read(1, 9, back, 3), PMA_OK);
-    assert_memory_equal(back, data + 1, 3);
+    TEST_ASSERT_EQUAL_MEMORY(data + 1, back, 3);
     assert_status(pma_hal_nvm_program(1, 40, data, 4), PMA_ERR_RANGE);
     assert_status(pma_hal_nvm_program(1, 44, data, 8), PMA_ERR_RANGE);
     /* outside a block or the device */
@@ -82,88 +81,85 @@ static void test_flash_semantics(void **state)
     uint8_t zeros[8] = {0};
     assert_status(pma_hal_nvm_program(1, 16, zeros, 8), PMA_ERR_NOT_ERASED);
     assert_status(pma_hal_nvm_read(1, 8, back, 16), PMA_OK);
-    assert_memory_equal(back, data, 16);
+    TEST_ASSERT_EQUAL_MEMORY(data, back, 16);
     /* partly erased units count too */
     assert_status(pma_hal_nvm_program(1, 0, zeros, 16), PMA_ERR_NOT_ERASED);
-    assert_true(all_equal(mem + BLOCK, 8, 0xFF));
+    TEST_ASSERT_TRUE(all_equal(mem + BLOCK, 8, 0xFF));
     /* erase: the whole block to 0xFF, others untouched */
     assert_status(pma_hal_nvm_program(2, 0, data, 16), PMA_OK);
     assert_status(pma_hal_nvm_erase(1), PMA_OK);
-    assert_true(all_equal(mem + BLOCK, BLOCK, 0xFF));
-    assert_memory_equal(mem + 2 * BLOCK, data, 16);
+    TEST_ASSERT_TRUE(all_equal(mem + BLOCK, BLOCK, 0xFF));
+    TEST_ASSERT_EQUAL_MEMORY(data, mem + 2 * BLOCK, 16);
     assert_status(pma_hal_nvm_program(1, 16, zeros, 8), PMA_OK);
-    assert_int_equal(pma_fake_nvm_op_count(), 4); /* 3 programs + 1 erase succeeded */
+    TEST_ASSERT_EQUAL_INT(4, pma_fake_nvm_op_count()); /* 3 programs + 1 erase succeeded */
 }
 
-static void test_power_cut_during_program(void **state)
+static void test_power_cut_during_program(void)
 {
-    (void)state;
     uint8_t data[32], back[32];
     for (unsigned i = 0; i < sizeof data; ++i) data[i] = (uint8_t)i;
     pma_fake_nvm_cut_power(2, 500);
     assert_status(pma_hal_nvm_program(0, 0, data, 8), PMA_OK);
     assert_status(pma_hal_nvm_program(0, 8, data, 8), PMA_OK);
-    assert_false(pma_fake_nvm_power_lost());
+    TEST_ASSERT_FALSE(pma_fake_nvm_power_lost());
     assert_status(pma_hal_nvm_program(0, 16, data, 32), PMA_ERR_IO); /* the cut one */
-    assert_true(pma_fake_nvm_power_lost());
+    TEST_ASSERT_TRUE(pma_fake_nvm_power_lost());
     /* dead until power-on */
     assert_status(pma_hal_nvm_read(0, 0, back, 8), PMA_ERR_IO);
     assert_status(pma_hal_nvm_erase(3), PMA_ERR_IO);
     assert_status(pma_hal_nvm_program(3, 0, data, 8), PMA_ERR_IO);
     /* a prefix of 16 of the 32 bytes went in */
-    assert_memory_equal(mem + 16, data, 16);
-    assert_true(all_equal(mem + 32, 16, 0xFF));
+    TEST_ASSERT_EQUAL_MEMORY(data, mem + 16, 16);
+    TEST_ASSERT_TRUE(all_equal(mem + 32, 16, 0xFF));
 
     pma_fake_power_on();
-    assert_int_equal(pma_hal_reset_cause(), PMA_RESET_POWER_ON);
+    TEST_ASSERT_EQUAL_INT(PMA_RESET_POWER_ON, pma_hal_reset_cause());
     assert_status(pma_hal_nvm_read(0, 0, back, 8), PMA_ERR_NOT_READY); /* MCU restarted */
     assert_status(pma_hal_init(NULL), PMA_OK);
-    assert_false(pma_fake_nvm_power_lost());
+    TEST_ASSERT_FALSE(pma_fake_nvm_power_lost());
     assert_status(pma_hal_nvm_read(0, 16, back, 32), PMA_OK); /* contents kept */
-    assert_memory_equal(back, data, 16);
+    TEST_ASSERT_EQUAL_MEMORY(data, back, 16);
     assert_status(pma_hal_nvm_program(0, 32, data, 16), PMA_OK); /* erased rest: usable */
-    assert_int_equal(pma_fake_nvm_op_count(), 4);
+    TEST_ASSERT_EQUAL_INT(4, pma_fake_nvm_op_count());
 }
 
-static void test_power_cut_during_erase(void **state)
+static void test_power_cut_during_erase(void)
 {
-    (void)state;
     uint8_t zeros[BLOCK];
     memset(zeros, 0, sizeof zeros);
     assert_status(pma_hal_nvm_program(2, 0, zeros, BLOCK), PMA_OK);
     pma_fake_nvm_cut_power(0, 250);
     assert_status(pma_hal_nvm_erase(2), PMA_ERR_IO);
-    assert_true(all_equal(mem + 2 * BLOCK, BLOCK / 4, 0xFF));               /* erased part */
-    assert_true(all_equal(mem + 2 * BLOCK + BLOCK / 4, BLOCK * 3 / 4, 0x00)); /* old data */
+    TEST_ASSERT_TRUE(all_equal(mem + 2 * BLOCK, BLOCK / 4, 0xFF));                /* erased part */
+    TEST_ASSERT_TRUE(all_equal(mem + 2 * BLOCK + BLOCK / 4, BLOCK * 3 / 4, 0x00)); /* old data */
     pma_fake_power_on();
     assert_status(pma_hal_init(NULL), PMA_OK);
     assert_status(pma_hal_nvm_erase(2), PMA_OK);
-    assert_true(all_equal(mem + 2 * BLOCK, BLOCK, 0xFF));
+    TEST_ASSERT_TRUE(all_equal(mem + 2 * BLOCK, BLOCK, 0xFF));
 }
 
 /* 0 permille: nothing applied; 1000: all applied, yet the caller sees the
  * failure (power went before the operation returned). */
-static void test_cut_extremes(void **state)
+static void test_cut_extremes(void)
 {
-    (void)state;
     const uint8_t data[8] = {1, 2, 3, 4, 5, 6, 7, 8};
     pma_fake_nvm_cut_power(0, 0);
     assert_status(pma_hal_nvm_program(0, 0, data, 8), PMA_ERR_IO);
-    assert_true(all_equal(mem, 8, 0xFF));
+    TEST_ASSERT_TRUE(all_equal(mem, 8, 0xFF));
     pma_fake_power_on();
     assert_status(pma_hal_init(NULL), PMA_OK);
     pma_fake_nvm_cut_power(0, 1000);
     assert_status(pma_hal_nvm_program(0, 0, data, 8), PMA_ERR_IO);
-    assert_memory_equal(mem, data, 8);
+    TEST_ASSERT_EQUAL_MEMORY(data, mem, 8);
     pma_fake_power_on();
     assert_status(pma_hal_init(NULL), PMA_OK);
     /* operations refused by their argument checks do not count towards the cut */
     pma_fake_nvm_cut_power(0, 1000);
     assert_status(pma_hal_nvm_program(0, 0, data, 8), PMA_ERR_NOT_ERASED);
     assert_status(pma_hal_nvm_program(0, 3, data, 8), PMA_ERR_RANGE);
-    assert_false(pma_fake_nvm_power_lost());
+    TEST_ASSERT_FALSE(pma_fake_nvm_power_lost());
     assert_status(pma_hal_nvm_erase(0), PMA_ERR_IO);
-    assert_true(all_equal(mem, BLOCK, 0xFF));
+    TEST_ASSERT_TRUE(all_equal(mem, BLOCK, 0xFF));
     /* a restart disarms a cut that has not happened yet */
     pma_fake_power_on();
     assert_status(pma_hal_init(NULL), PMA_OK);
@@ -173,27 +169,25 @@ static void test_cut_extremes(void **state)
     for (int i = 0; i < 10; ++i) assert_status(pma_hal_nvm_erase(1), PMA_OK);
 }
 
-static void test_worn_byte(void **state)
+static void test_worn_byte(void)
 {
-    (void)state;
     const uint8_t data[8] = {1, 2, 3, 4, 5, 6, 7, 8};
     pma_fake_nvm_stuck_byte(3, 5, true);
     assert_status(pma_hal_nvm_program(3, 0, data, 8), PMA_OK); /* reports success */
     uint8_t back[8];
     assert_status(pma_hal_nvm_read(3, 0, back, 8), PMA_OK);
-    assert_int_equal(back[4], 5);
-    assert_int_equal(back[5], 0xFF);
+    TEST_ASSERT_EQUAL_HEX8(5, back[4]);
+    TEST_ASSERT_EQUAL_HEX8(0xFF, back[5]);
     pma_fake_nvm_stuck_byte(3, 5, false);
     assert_status(pma_hal_nvm_erase(3), PMA_OK);
     assert_status(pma_hal_nvm_program(3, 0, data, 8), PMA_OK);
     assert_status(pma_hal_nvm_read(3, 0, back, 8), PMA_OK);
-    assert_memory_equal(back, data, 8);
+    TEST_ASSERT_EQUAL_MEMORY(data, back, 8);
 }
 
 /* ECC flash: a unit left half-written by a cut reads as corrupt until erased. */
-static void test_ecc_torn_unit(void **state)
+static void test_ecc_torn_unit(void)
 {
-    (void)state;
     uint8_t data[16], back[16];
     memset(data, 0x00, sizeof data);
     pma_fake_nvm_ecc(true);
@@ -229,19 +223,18 @@ static void test_ecc_torn_unit(void **state)
     assert_status(pma_hal_nvm_erase(0), PMA_OK);
     assert_status(pma_hal_nvm_read(0, 0, back, 16), PMA_OK);
     assert_status(pma_hal_nvm_read(0, 16, back, 16), PMA_OK);
-    assert_true(all_equal(mem, BLOCK, 0xFF));
+    TEST_ASSERT_TRUE(all_equal(mem, BLOCK, 0xFF));
 }
 
 int main(void)
 {
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test_setup(test_attach_and_geometry, setup),
-        cmocka_unit_test_setup(test_flash_semantics, setup),
-        cmocka_unit_test_setup(test_power_cut_during_program, setup),
-        cmocka_unit_test_setup(test_power_cut_during_erase, setup),
-        cmocka_unit_test_setup(test_cut_extremes, setup),
-        cmocka_unit_test_setup(test_worn_byte, setup),
-        cmocka_unit_test_setup(test_ecc_torn_unit, setup),
-    };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    UNITY_BEGIN();
+    RUN_TEST(test_attach_and_geometry);
+    RUN_TEST(test_flash_semantics);
+    RUN_TEST(test_power_cut_during_program);
+    RUN_TEST(test_power_cut_during_erase);
+    RUN_TEST(test_cut_extremes);
+    RUN_TEST(test_worn_byte);
+    RUN_TEST(test_ecc_torn_unit);
+    return UNITY_END();
 }

@@ -14,13 +14,14 @@
 #include "pma/hal.h"
 #include "pma_hal_linux.h"
 
-/* Fails the test unless `sub` occurs in `s`, printing both. */
+/* Fails the test unless `sub` occurs in `s`, printing both (their first 110
+ * characters: the message has PMA_TEST_MSG_CHARS). */
 #define assert_contains(s, sub)                                                          \
     do {                                                                                  \
         const char *s_ = (s), *sub_ = (sub);                                              \
         if (s_ == NULL || strstr(s_, sub_) == NULL) {                                     \
-            print_error("\"%s\" does not contain \"%s\"\n", s_ ? s_ : "(null)", sub_);    \
-            fail();                                                                       \
+            pma_test_fail("\"%.110s\" does not contain \"%.110s\"", s_ ? s_ : "(null)",   \
+                          sub_);                                                          \
         }                                                                                 \
     } while (0)
 
@@ -30,8 +31,8 @@ static inline void linux_test_mkdtemp(char *dir, size_t capacity)
     const char *base = getenv("TMPDIR");
     if (base == NULL || base[0] == '\0') base = "/tmp";
     const int n = snprintf(dir, capacity, "%s/pma_hal_linux_XXXXXX", base);
-    assert_true(n > 0 && (size_t)n < capacity);
-    assert_non_null(mkdtemp(dir));
+    TEST_ASSERT_TRUE(n > 0 && (size_t)n < capacity);
+    TEST_ASSERT_NOT_NULL(mkdtemp(dir));
 }
 
 /* Removes the directory and the plain files in it. */

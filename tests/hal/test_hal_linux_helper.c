@@ -1,5 +1,5 @@
 /* Helper program of test_hal_linux_reset.c: does the things that end or
- * replace a process (watchdog reset, power cut), so that the cmocka test can
+ * replace a process (watchdog reset, power cut), so that the test can
  * run it and check its exit status and output. Not a test by itself.
  *
  *   cause                      print the reset cause and the environment variable

@@ -13,21 +13,25 @@
 
 #include "linux_internal.h"
 
-static char dir[256];
+static char dir[256];  /* the test's directory; "" when it has none */
+static int locker = -1; /* test_storage_errors: the other holder of the storage file */
 
-static int setup(void **state)
+/* The fixture of the tests of the port itself: a fresh directory for their
+ * files. The pure tests (ring, error frames, reset-cause names) have none. */
+static void make_dir(void)
 {
-    (void)state;
     linux_test_mkdtemp(dir, sizeof dir);
-    return 0;
 }
 
-static int teardown(void **state)
+/* After every test, also one that failed: the port down (a no-op for the
+ * pure tests), the directory removed, the lock holder's file closed. */
+void tearDown(void)
 {
-    (void)state;
     pma_hal_deinit();
-    linux_test_rmdir(dir);
-    return 0;
+    if (dir[0] != '\0') linux_test_rmdir(dir);
+    dir[0] = '\0';
+    if (locker >= 0) (void)close(locker);
+    locker = -1;
 }
 
 static pma_hal_linux_config_t no_can_config(void)
@@ -67,23 +71,23 @@ static void check_not_ready(void)
     assert_status(pma_hal_dac_write(0), PMA_ERR_NOT_READY);
 }
 
-static void test_not_ready_and_name(void **state)
+static void test_not_ready_and_name(void)
 {
-    (void)state;
-    assert_string_equal(pma_hal_port_name(), "linux");
+    make_dir();
+    TEST_ASSERT_EQUAL_STRING("linux", pma_hal_port_name());
     check_not_ready();
-    assert_true(pma_hal_time_us() > 0); /* the clock works before init */
+    TEST_ASSERT_GREATER_THAN_UINT64(0, pma_hal_time_us()); /* the clock works before init */
     pma_hal_watchdog_kick();            /* not started: does nothing */
     assert_status(pma_hal_watchdog_start(0), PMA_ERR_RANGE);
     assert_status(pma_hal_watchdog_start(PMA_HAL_LINUX_WATCHDOG_MAX_MS + 1u), PMA_ERR_RANGE);
 }
 
-static void test_no_can_devices(void **state)
+static void test_no_can_devices(void)
 {
-    (void)state;
+    make_dir();
     const pma_hal_linux_config_t c = no_can_config();
     assert_status(init_with(&c), PMA_OK);
-    assert_string_equal(pma_hal_linux_last_error(), "");
+    TEST_ASSERT_EQUAL_STRING("", pma_hal_linux_last_error());
     pma_can_frame_t f = {.id = 1, .dlc = 0, .data = {0}};
     pma_can_status_t st;
     assert_status(pma_hal_can_send(&f), PMA_ERR_NOT_IMPLEMENTED);
@@ -110,14 +114,14 @@ static void test_no_can_devices(void **state)
 /* A missing interface: on a kernel without SocketCAN (this project's build
  * machines) socket(PF_CAN) itself fails; with SocketCAN the name is unknown.
  * Either way the message names the interface and the reason. */
-static void test_missing_interface(void **state)
+static void test_missing_interface(void)
 {
-    (void)state;
+    make_dir();
     pma_hal_linux_config_t c = PMA_HAL_LINUX_CONFIG_INIT;
     c.can_ifname = "vcan7";
     assert_status(init_with(&c), PMA_ERR_IO);
     const char *msg = pma_hal_linux_last_error();
-    print_message("message: %s\n", msg);
+    printf("message: %s\n", msg);
     assert_contains(msg, "CAN interface vcan7: ");
     if (strstr(msg, "No such device") == NULL) {
         assert_contains(msg, "Address family not supported by protocol");
@@ -127,21 +131,21 @@ static void test_missing_interface(void **state)
 }
 
 /* pma_hal_init(NULL): the defaults, i.e. CAN on vcan0 (and nothing else). */
-static void test_null_config_is_vcan0(void **state)
+static void test_null_config_is_vcan0(void)
 {
-    (void)state;
+    make_dir();
     const int rc = pma_hal_init(NULL);
     if (rc == PMA_OK) { /* a host with SocketCAN and a vcan0 */
-        assert_string_equal(pma_hal_linux_last_error(), "");
+        TEST_ASSERT_EQUAL_STRING("", pma_hal_linux_last_error());
         return;
     }
     assert_status(rc, PMA_ERR_IO);
     assert_contains(pma_hal_linux_last_error(), "CAN interface vcan0: ");
 }
 
-static void test_config_errors(void **state)
+static void test_config_errors(void)
 {
-    (void)state;
+    make_dir();
     pma_hal_linux_config_t c = PMA_HAL_LINUX_CONFIG_INIT;
     c.can_ifname = NULL;
     assert_status(init_with(&c), PMA_ERR_NULL);
@@ -177,13 +181,13 @@ static void test_config_errors(void **state)
     c.nvm_cut_permille = 0;
     c.nvm_cut_after_ops = -2;
     assert_status(init_with(&c), PMA_ERR_RANGE);
-    assert_int_equal(access(path, F_OK), -1); /* nothing was created */
+    TEST_ASSERT_EQUAL_INT(-1, access(path, F_OK)); /* nothing was created */
     check_not_ready();
 }
 
-static void test_storage_errors(void **state)
+static void test_storage_errors(void)
 {
-    (void)state;
+    make_dir();
     char path[300];
     pma_hal_linux_config_t c = no_can_config();
     c.storage_path = path;
@@ -201,19 +205,20 @@ static void test_storage_errors(void **state)
     (void)snprintf(path, sizeof path, "%s/nvm.bin", dir);
     assert_status(init_with(&c), PMA_OK); /* creates it */
     pma_hal_deinit();
-    const int fd = open(path, O_RDWR | O_CLOEXEC);
-    assert_true(fd >= 0);
-    assert_int_equal(flock(fd, LOCK_EX | LOCK_NB), 0);
+    locker = open(path, O_RDWR | O_CLOEXEC);
+    TEST_ASSERT_TRUE(locker >= 0);
+    TEST_ASSERT_EQUAL_INT(0, flock(locker, LOCK_EX | LOCK_NB));
     assert_status(init_with(&c), PMA_ERR_IO);
     assert_contains(pma_hal_linux_last_error(), "in use by another process");
-    (void)close(fd);
+    (void)close(locker);
+    locker = -1;
     assert_status(init_with(&c), PMA_OK);
 }
 
 /* Re-initialising keeps working and a failed re-init leaves nothing open. */
-static void test_reinit(void **state)
+static void test_reinit(void)
 {
-    (void)state;
+    make_dir();
     pma_hal_linux_config_t c = no_can_config();
     assert_status(init_with(&c), PMA_OK);
     assert_status(pma_hal_tick_start(1000), PMA_OK);
@@ -227,9 +232,8 @@ static void test_reinit(void **state)
 
 /* ------------------------------------------------------------ RX ring -- */
 
-static void test_ring_order_and_capacity(void **state)
+static void test_ring_order_and_capacity(void)
 {
-    (void)state;
     static pma_linux_ring_t r;
     pma_linux_ring_clear(&r);
     pma_can_frame_t f = {.id = 0, .dlc = 2, .data = {0}};
@@ -242,22 +246,22 @@ static void test_ring_order_and_capacity(void **state)
             if (!pma_linux_ring_push(&r, &f)) break;
             next_in++;
         }
-        assert_int_equal(r.count, PMA_HAL_LINUX_CAN_RX_DEPTH);
+        TEST_ASSERT_EQUAL_INT(PMA_HAL_LINUX_CAN_RX_DEPTH, r.count);
         for (uint32_t i = 0; i < PMA_HAL_LINUX_CAN_RX_DEPTH / 2u + (uint32_t)round; ++i) {
             pma_can_frame_t out;
-            assert_true(pma_linux_ring_pop(&r, &out));
-            assert_int_equal(out.id, next_out & 0x7FFu);
-            assert_int_equal(out.data[0], (uint8_t)next_out);
+            TEST_ASSERT_TRUE(pma_linux_ring_pop(&r, &out));
+            TEST_ASSERT_EQUAL_INT(next_out & 0x7FFu, out.id);
+            TEST_ASSERT_EQUAL_INT((uint8_t)next_out, out.data[0]);
             next_out++;
         }
     }
     pma_can_frame_t out;
     while (pma_linux_ring_pop(&r, &out)) {
-        assert_int_equal(out.id, next_out & 0x7FFu);
+        TEST_ASSERT_EQUAL_INT(next_out & 0x7FFu, out.id);
         next_out++;
     }
-    assert_int_equal(next_out, next_in);
-    assert_false(pma_linux_ring_pop(&r, &out));
+    TEST_ASSERT_EQUAL_INT(next_in, next_out);
+    TEST_ASSERT_FALSE(pma_linux_ring_pop(&r, &out));
 }
 
 /* ------------------------------------------------------- error frames -- */
@@ -268,119 +272,116 @@ static void apply(pma_linux_can_err_t *e, uint32_t id, uint8_t d1, uint8_t tec, 
     pma_linux_can_err_apply(e, id, data);
 }
 
-static void test_error_frames_counters(void **state)
+static void test_error_frames_counters(void)
 {
-    (void)state;
     pma_linux_can_err_t e;
     pma_linux_can_err_reset(&e);
-    assert_int_equal(pma_linux_can_err_state(&e), PMA_CAN_ERROR_ACTIVE);
+    TEST_ASSERT_EQUAL_INT(PMA_CAN_ERROR_ACTIVE, pma_linux_can_err_state(&e));
 
     /* a data frame is no error report */
     apply(&e, 0x123, CAN_ERR_CRTL_TX_PASSIVE, 200, 0);
-    assert_int_equal(pma_linux_can_err_state(&e), PMA_CAN_ERROR_ACTIVE);
+    TEST_ASSERT_EQUAL_INT(PMA_CAN_ERROR_ACTIVE, pma_linux_can_err_state(&e));
 
     /* counters given by CAN_ERR_CNT */
     apply(&e, CAN_ERR_FLAG | CAN_ERR_CRTL | CAN_ERR_CNT, CAN_ERR_CRTL_TX_PASSIVE, 130, 5);
-    assert_int_equal(e.tec, 130);
-    assert_int_equal(e.rec, 5);
-    assert_int_equal(pma_linux_can_err_state(&e), PMA_CAN_ERROR_PASSIVE);
+    TEST_ASSERT_EQUAL_INT(130, e.tec);
+    TEST_ASSERT_EQUAL_INT(5, e.rec);
+    TEST_ASSERT_EQUAL_INT(PMA_CAN_ERROR_PASSIVE, pma_linux_can_err_state(&e));
     apply(&e, CAN_ERR_FLAG | CAN_ERR_CRTL | CAN_ERR_CNT, CAN_ERR_CRTL_ACTIVE, 20, 3);
-    assert_int_equal(e.tec, 20);
-    assert_int_equal(pma_linux_can_err_state(&e), PMA_CAN_ERROR_ACTIVE);
+    TEST_ASSERT_EQUAL_INT(20, e.tec);
+    TEST_ASSERT_EQUAL_INT(PMA_CAN_ERROR_ACTIVE, pma_linux_can_err_state(&e));
 
     /* without counters: the state's nearest value */
     pma_linux_can_err_reset(&e);
     apply(&e, CAN_ERR_FLAG | CAN_ERR_CRTL, CAN_ERR_CRTL_RX_WARNING, 0, 0);
-    assert_int_equal(e.rec, 96);
-    assert_int_equal(pma_linux_can_err_state(&e), PMA_CAN_ERROR_ACTIVE); /* warning is active */
+    TEST_ASSERT_EQUAL_INT(96, e.rec);
+    /* warning is active */
+    TEST_ASSERT_EQUAL_INT(PMA_CAN_ERROR_ACTIVE, pma_linux_can_err_state(&e));
     apply(&e, CAN_ERR_FLAG | CAN_ERR_CRTL, CAN_ERR_CRTL_RX_PASSIVE, 0, 0);
-    assert_int_equal(e.rec, 128);
-    assert_int_equal(pma_linux_can_err_state(&e), PMA_CAN_ERROR_PASSIVE);
+    TEST_ASSERT_EQUAL_INT(128, e.rec);
+    TEST_ASSERT_EQUAL_INT(PMA_CAN_ERROR_PASSIVE, pma_linux_can_err_state(&e));
     apply(&e, CAN_ERR_FLAG | CAN_ERR_CRTL, CAN_ERR_CRTL_TX_PASSIVE | CAN_ERR_CRTL_RX_WARNING, 0, 0);
-    assert_int_equal(e.tec, 128);
-    assert_int_equal(e.rec, 127); /* down from passive to warning */
+    TEST_ASSERT_EQUAL_INT(128, e.tec);
+    TEST_ASSERT_EQUAL_INT(127, e.rec); /* down from passive to warning */
     apply(&e, CAN_ERR_FLAG | CAN_ERR_CRTL, CAN_ERR_CRTL_TX_WARNING, 0, 0);
-    assert_int_equal(e.tec, 127);
-    assert_int_equal(pma_linux_can_err_state(&e), PMA_CAN_ERROR_ACTIVE);
+    TEST_ASSERT_EQUAL_INT(127, e.tec);
+    TEST_ASSERT_EQUAL_INT(PMA_CAN_ERROR_ACTIVE, pma_linux_can_err_state(&e));
     apply(&e, CAN_ERR_FLAG | CAN_ERR_CRTL, CAN_ERR_CRTL_ACTIVE, 0, 0);
-    assert_int_equal(e.tec, 95);
-    assert_int_equal(e.rec, 95);
-    assert_int_equal(pma_linux_can_err_state(&e), PMA_CAN_ERROR_ACTIVE);
+    TEST_ASSERT_EQUAL_INT(95, e.tec);
+    TEST_ASSERT_EQUAL_INT(95, e.rec);
+    TEST_ASSERT_EQUAL_INT(PMA_CAN_ERROR_ACTIVE, pma_linux_can_err_state(&e));
 
     /* controller RX overflow: frames lost before the socket */
     apply(&e, CAN_ERR_FLAG | CAN_ERR_CRTL, CAN_ERR_CRTL_RX_OVERFLOW, 0, 0);
     apply(&e, CAN_ERR_FLAG | CAN_ERR_CRTL, CAN_ERR_CRTL_RX_OVERFLOW, 0, 0);
-    assert_int_equal(e.controller_rx_overflows, 2);
-    assert_int_equal(e.tec, 95); /* no state bits: counters unchanged */
+    TEST_ASSERT_EQUAL_INT(2, e.controller_rx_overflows);
+    TEST_ASSERT_EQUAL_INT(95, e.tec); /* no state bits: counters unchanged */
 }
 
-static void test_error_frames_bus_off(void **state)
+static void test_error_frames_bus_off(void)
 {
-    (void)state;
     pma_linux_can_err_t e;
     pma_linux_can_err_reset(&e);
     apply(&e, CAN_ERR_FLAG | CAN_ERR_BUSOFF, 0, 0, 0);
-    assert_true(e.bus_off);
-    assert_int_equal(e.tec, 256);
-    assert_int_equal(pma_linux_can_err_state(&e), PMA_CAN_BUS_OFF);
+    TEST_ASSERT_TRUE(e.bus_off);
+    TEST_ASSERT_EQUAL_INT(256, e.tec);
+    TEST_ASSERT_EQUAL_INT(PMA_CAN_BUS_OFF, pma_linux_can_err_state(&e));
     /* counters and state reports do not move a latched bus-off */
     apply(&e, CAN_ERR_FLAG | CAN_ERR_CRTL | CAN_ERR_CNT, CAN_ERR_CRTL_ACTIVE, 0, 0);
-    assert_int_equal(e.tec, 256);
-    assert_int_equal(pma_linux_can_err_state(&e), PMA_CAN_BUS_OFF);
+    TEST_ASSERT_EQUAL_INT(256, e.tec);
+    TEST_ASSERT_EQUAL_INT(PMA_CAN_BUS_OFF, pma_linux_can_err_state(&e));
     /* the driver restarted (restart-ms) before the application asked: latched */
     apply(&e, CAN_ERR_FLAG | CAN_ERR_RESTARTED, 0, 0, 0);
-    assert_true(e.kernel_restarted);
-    assert_int_equal(pma_linux_can_err_state(&e), PMA_CAN_BUS_OFF);
+    TEST_ASSERT_TRUE(e.kernel_restarted);
+    TEST_ASSERT_EQUAL_INT(PMA_CAN_BUS_OFF, pma_linux_can_err_state(&e));
     pma_linux_can_err_recovered(&e);
-    assert_int_equal(pma_linux_can_err_state(&e), PMA_CAN_ERROR_ACTIVE);
-    assert_int_equal(e.tec, 0);
-    assert_false(e.kernel_restarted);
+    TEST_ASSERT_EQUAL_INT(PMA_CAN_ERROR_ACTIVE, pma_linux_can_err_state(&e));
+    TEST_ASSERT_EQUAL_INT(0, e.tec);
+    TEST_ASSERT_FALSE(e.kernel_restarted);
 
     /* asked first, then the driver's restart completes it */
     apply(&e, CAN_ERR_FLAG | CAN_ERR_BUSOFF, 0, 0, 0);
     e.recovery_requested = true;
     apply(&e, CAN_ERR_FLAG | CAN_ERR_CRTL, CAN_ERR_CRTL_ACTIVE, 0, 0);
-    assert_int_equal(pma_linux_can_err_state(&e), PMA_CAN_BUS_OFF);
+    TEST_ASSERT_EQUAL_INT(PMA_CAN_BUS_OFF, pma_linux_can_err_state(&e));
     apply(&e, CAN_ERR_FLAG | CAN_ERR_RESTARTED, 0, 0, 0);
-    assert_int_equal(pma_linux_can_err_state(&e), PMA_CAN_ERROR_ACTIVE);
-    assert_false(e.recovery_requested);
-    assert_int_equal(e.tec, 0);
-    assert_int_equal(e.rec, 0);
+    TEST_ASSERT_EQUAL_INT(PMA_CAN_ERROR_ACTIVE, pma_linux_can_err_state(&e));
+    TEST_ASSERT_FALSE(e.recovery_requested);
+    TEST_ASSERT_EQUAL_INT(0, e.tec);
+    TEST_ASSERT_EQUAL_INT(0, e.rec);
 
     /* a restart report while not bus-off: counters start from 0 */
     apply(&e, CAN_ERR_FLAG | CAN_ERR_CRTL | CAN_ERR_CNT, CAN_ERR_CRTL_TX_PASSIVE, 140, 7);
     apply(&e, CAN_ERR_FLAG | CAN_ERR_RESTARTED, 0, 0, 0);
-    assert_int_equal(e.tec, 0);
-    assert_int_equal(e.rec, 0);
+    TEST_ASSERT_EQUAL_INT(0, e.tec);
+    TEST_ASSERT_EQUAL_INT(0, e.rec);
 }
 
-static void test_reset_cause_names(void **state)
+static void test_reset_cause_names(void)
 {
-    (void)state;
-    assert_int_equal(pma_linux_reset_cause_parse(NULL), PMA_RESET_POWER_ON);
-    assert_int_equal(pma_linux_reset_cause_parse("WATCHDOG"), PMA_RESET_WATCHDOG);
-    assert_int_equal(pma_linux_reset_cause_parse("SOFTWARE"), PMA_RESET_SOFTWARE);
-    assert_int_equal(pma_linux_reset_cause_parse("PIN"), PMA_RESET_PIN);
-    assert_int_equal(pma_linux_reset_cause_parse("BROWNOUT"), PMA_RESET_BROWNOUT);
-    assert_int_equal(pma_linux_reset_cause_parse("POWER_ON"), PMA_RESET_POWER_ON);
-    assert_int_equal(pma_linux_reset_cause_parse("watchdog"), PMA_RESET_UNKNOWN);
-    assert_int_equal(pma_linux_reset_cause_parse(""), PMA_RESET_UNKNOWN);
+    TEST_ASSERT_EQUAL_INT(PMA_RESET_POWER_ON, pma_linux_reset_cause_parse(NULL));
+    TEST_ASSERT_EQUAL_INT(PMA_RESET_WATCHDOG, pma_linux_reset_cause_parse("WATCHDOG"));
+    TEST_ASSERT_EQUAL_INT(PMA_RESET_SOFTWARE, pma_linux_reset_cause_parse("SOFTWARE"));
+    TEST_ASSERT_EQUAL_INT(PMA_RESET_PIN, pma_linux_reset_cause_parse("PIN"));
+    TEST_ASSERT_EQUAL_INT(PMA_RESET_BROWNOUT, pma_linux_reset_cause_parse("BROWNOUT"));
+    TEST_ASSERT_EQUAL_INT(PMA_RESET_POWER_ON, pma_linux_reset_cause_parse("POWER_ON"));
+    TEST_ASSERT_EQUAL_INT(PMA_RESET_UNKNOWN, pma_linux_reset_cause_parse("watchdog"));
+    TEST_ASSERT_EQUAL_INT(PMA_RESET_UNKNOWN, pma_linux_reset_cause_parse(""));
 }
 
 int main(void)
 {
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test_setup_teardown(test_not_ready_and_name, setup, teardown),
-        cmocka_unit_test_setup_teardown(test_no_can_devices, setup, teardown),
-        cmocka_unit_test_setup_teardown(test_missing_interface, setup, teardown),
-        cmocka_unit_test_setup_teardown(test_null_config_is_vcan0, setup, teardown),
-        cmocka_unit_test_setup_teardown(test_config_errors, setup, teardown),
-        cmocka_unit_test_setup_teardown(test_storage_errors, setup, teardown),
-        cmocka_unit_test_setup_teardown(test_reinit, setup, teardown),
-        cmocka_unit_test(test_ring_order_and_capacity),
-        cmocka_unit_test(test_error_frames_counters),
-        cmocka_unit_test(test_error_frames_bus_off),
-        cmocka_unit_test(test_reset_cause_names),
-    };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    UNITY_BEGIN();
+    RUN_TEST(test_not_ready_and_name);
+    RUN_TEST(test_no_can_devices);
+    RUN_TEST(test_missing_interface);
+    RUN_TEST(test_null_config_is_vcan0);
+    RUN_TEST(test_config_errors);
+    RUN_TEST(test_storage_errors);
+    RUN_TEST(test_reinit);
+    RUN_TEST(test_ring_order_and_capacity);
+    RUN_TEST(test_error_frames_counters);
+    RUN_TEST(test_error_frames_bus_off);
+    RUN_TEST(test_reset_cause_names);
+    return UNITY_END();
 }

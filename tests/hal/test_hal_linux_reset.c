@@ -21,19 +21,18 @@ extern char **environ;
 static char dir[256];
 static char out[16384];
 
-static int setup(void **state)
+/* Every test: a fresh directory for its files. */
+void setUp(void)
 {
-    (void)state;
+    dir[0] = '\0';
     linux_test_mkdtemp(dir, sizeof dir);
-    return 0;
 }
 
-static int teardown(void **state)
+/* After every test, also one that failed: the port down, the directory removed. */
+void tearDown(void)
 {
-    (void)state;
     pma_hal_deinit();
-    linux_test_rmdir(dir);
-    return 0;
+    if (dir[0] != '\0') linux_test_rmdir(dir);
 }
 
 /* Runs the helper with args (NULL-terminated, after the program name) and
@@ -64,10 +63,14 @@ static int run_helper(const char *cause, const char *const *args)
     envp[n] = NULL;
 
     int fds[2];
-    assert_int_equal(pipe2(fds, O_CLOEXEC), 0);
+    TEST_ASSERT_EQUAL_INT(0, pipe2(fds, O_CLOEXEC));
     fflush(NULL);
     const pid_t pid = fork();
-    assert_true(pid >= 0);
+    if (pid < 0) {
+        (void)close(fds[0]);
+        (void)close(fds[1]);
+    }
+    TEST_ASSERT_TRUE(pid >= 0);
     if (pid == 0) {
         (void)dup2(fds[1], STDOUT_FILENO);
         (void)dup2(fds[1], STDERR_FILENO);
@@ -86,54 +89,50 @@ static int run_helper(const char *cause, const char *const *args)
     out[used] = '\0';
     (void)close(fds[0]);
     int status;
-    while (waitpid(pid, &status, 0) < 0) assert_int_equal(errno, EINTR);
-    print_message("--- helper %s%s%s:\n%s--- end\n", args[0], cause ? " with cause " : "",
-                  cause ? cause : "", out);
+    while (waitpid(pid, &status, 0) < 0) TEST_ASSERT_EQUAL_INT(EINTR, errno);
+    printf("--- helper %s%s%s:\n%s--- end\n", args[0], cause ? " with cause " : "",
+           cause ? cause : "", out);
     if (WIFSIGNALED(status)) return 128 + WTERMSIG(status);
     return WEXITSTATUS(status);
 }
 
-static void test_reset_cause_from_environment(void **state)
+static void test_reset_cause_from_environment(void)
 {
-    (void)state;
     static const char *const cause[] = {"cause", NULL};
-    assert_int_equal(run_helper(NULL, cause), 0);
+    TEST_ASSERT_EQUAL_INT(0, run_helper(NULL, cause));
     assert_contains(out, "cause=1 env=(unset)\n"); /* POWER_ON */
-    assert_int_equal(run_helper("WATCHDOG", cause), 0);
+    TEST_ASSERT_EQUAL_INT(0, run_helper("WATCHDOG", cause));
     assert_contains(out, "cause=2 env=(unset)\n"); /* read, then removed */
     assert_contains(out, "after init cause=2\n");
-    assert_int_equal(run_helper("SOFTWARE", cause), 0);
+    TEST_ASSERT_EQUAL_INT(0, run_helper("SOFTWARE", cause));
     assert_contains(out, "cause=3 env=(unset)\n");
-    assert_int_equal(run_helper("no such cause", cause), 0);
+    TEST_ASSERT_EQUAL_INT(0, run_helper("no such cause", cause));
     assert_contains(out, "cause=0 env=(unset)\n"); /* UNKNOWN */
 }
 
-static void test_watchdog_reexecutes(void **state)
+static void test_watchdog_reexecutes(void)
 {
-    (void)state;
     static const char *const args[] = {"watchdog", "50", "1", NULL};
-    assert_int_equal(run_helper(NULL, args), 0);
+    TEST_ASSERT_EQUAL_INT(0, run_helper(NULL, args));
     assert_contains(out, "start cause=1\nstarted\n");
     assert_contains(out, "watchdog expired");
     assert_contains(out, "start cause=2\nafter reset env=(unset)\n");
 }
 
-static void test_watchdog_exits_without_argv(void **state)
+static void test_watchdog_exits_without_argv(void)
 {
-    (void)state;
     static const char *const args[] = {"watchdog", "30", "0", NULL};
-    assert_int_equal(run_helper(NULL, args), PMA_HAL_LINUX_EXIT_WATCHDOG);
+    TEST_ASSERT_EQUAL_INT(PMA_HAL_LINUX_EXIT_WATCHDOG, run_helper(NULL, args));
     assert_contains(out, "started\n");
     assert_contains(out, "watchdog expired");
     assert_contains(out, "exiting (no argv");
 }
 
 /* A new, shorter timeout applies at once (the thread does not sleep out the old one). */
-static void test_watchdog_shortened(void **state)
+static void test_watchdog_shortened(void)
 {
-    (void)state;
     static const char *const args[] = {"shorten", NULL};
-    assert_int_equal(run_helper(NULL, args), PMA_HAL_LINUX_EXIT_WATCHDOG);
+    TEST_ASSERT_EQUAL_INT(PMA_HAL_LINUX_EXIT_WATCHDOG, run_helper(NULL, args));
     assert_contains(out, "shortened\n");
     assert_contains(out, "watchdog expired (no kick for more than 20 ms)");
 }
@@ -141,13 +140,12 @@ static void test_watchdog_shortened(void **state)
 /* Kicks every 2 ms for 1.2 s against a 500 ms timeout (this fails only if the
  * helper is not scheduled for half a second), then the reset, which the
  * re-executed helper checks came more than 500 ms after the last kick. */
-static void test_watchdog_kicked(void **state)
+static void test_watchdog_kicked(void)
 {
-    (void)state;
     char file[300];
     (void)snprintf(file, sizeof file, "%s/last_kick", dir);
     const char *const args[] = {"kick", "500", "1200", file, NULL};
-    assert_int_equal(run_helper(NULL, args), 0);
+    TEST_ASSERT_EQUAL_INT(0, run_helper(NULL, args));
     assert_contains(out, "kicked for 1200 ms\n");
     assert_contains(out, "watchdog expired");
     assert_contains(out, "reset no earlier than the timeout after the last kick\n");
@@ -181,9 +179,8 @@ static void model(uint8_t mem[128], int32_t cut_after, uint32_t permille)
     }
 }
 
-static void test_power_cut(void **state)
+static void test_power_cut(void)
 {
-    (void)state;
     static const struct {
         int32_t after;
         uint32_t permille;
@@ -198,14 +195,14 @@ static void test_power_cut(void **state)
         const char *const args[] = {"powercut", path, after, permille, NULL};
         const int status = run_helper(NULL, args);
         if (cases[c].after < 0) {
-            assert_int_equal(status, 0);
+            TEST_ASSERT_EQUAL_INT(0, status);
             assert_contains(out, "op3 0\n");
         } else {
-            assert_int_equal(status, PMA_HAL_LINUX_EXIT_POWER_CUT);
+            TEST_ASSERT_EQUAL_INT(PMA_HAL_LINUX_EXIT_POWER_CUT, status);
             assert_contains(out, "power cut");
             char line[16];
             (void)snprintf(line, sizeof line, "op%d", (int)cases[c].after);
-            assert_null(strstr(out, line)); /* the cut operation never returned */
+            TEST_ASSERT_NULL(strstr(out, line)); /* the cut operation never returned */
         }
         uint8_t want[128], got[128];
         model(want, cases[c].after, cases[c].permille);
@@ -220,19 +217,18 @@ static void test_power_cut(void **state)
         assert_status(pma_hal_nvm_read(0, 0, got, 64), PMA_OK);
         assert_status(pma_hal_nvm_read(1, 0, got + 64, 64), PMA_OK);
         pma_hal_deinit();
-        assert_memory_equal(got, want, sizeof want);
+        TEST_ASSERT_EQUAL_MEMORY(want, got, sizeof want);
     }
 }
 
 int main(void)
 {
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test_setup_teardown(test_reset_cause_from_environment, setup, teardown),
-        cmocka_unit_test_setup_teardown(test_watchdog_reexecutes, setup, teardown),
-        cmocka_unit_test_setup_teardown(test_watchdog_exits_without_argv, setup, teardown),
-        cmocka_unit_test_setup_teardown(test_watchdog_shortened, setup, teardown),
-        cmocka_unit_test_setup_teardown(test_watchdog_kicked, setup, teardown),
-        cmocka_unit_test_setup_teardown(test_power_cut, setup, teardown),
-    };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    UNITY_BEGIN();
+    RUN_TEST(test_reset_cause_from_environment);
+    RUN_TEST(test_watchdog_reexecutes);
+    RUN_TEST(test_watchdog_exits_without_argv);
+    RUN_TEST(test_watchdog_shortened);
+    RUN_TEST(test_watchdog_kicked);
+    RUN_TEST(test_power_cut);
+    return UNITY_END();
 }

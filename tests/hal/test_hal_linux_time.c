@@ -11,20 +11,21 @@
 
 #define PERIOD_US 2000u
 
-static int setup(void **state)
+/* The fixture of the tick tests: the port up without CAN (the clock test
+ * needs none). */
+static void init_no_can(void)
 {
-    (void)state;
     pma_hal_linux_config_t c = PMA_HAL_LINUX_CONFIG_INIT;
     c.no_can = 1;
     const pma_hal_config_t cfg = {.can_bitrate_bps = 0, .port = &c};
-    return pma_hal_init(&cfg) == PMA_OK ? 0 : -1;
+    assert_status(pma_hal_init(&cfg), PMA_OK);
 }
 
-static int teardown(void **state)
+/* After every test, also one that failed: the port down (a no-op when it was
+ * not up). */
+void tearDown(void)
 {
-    (void)state;
     pma_hal_deinit();
-    return 0;
 }
 
 /* Sleeps at least dt_us on CLOCK_MONOTONIC (the clock of pma_hal_time_us). */
@@ -37,26 +38,25 @@ static void sleep_us(uint64_t dt_us)
     }
 }
 
-static void test_time_monotonic(void **state)
+static void test_time_monotonic(void)
 {
-    (void)state;
     uint64_t prev = pma_hal_time_us();
     for (int i = 0; i < 100000; ++i) {
         const uint64_t now = pma_hal_time_us();
-        assert_true(now >= prev);
+        TEST_ASSERT_GREATER_OR_EQUAL_UINT64(prev, now);
         prev = now;
     }
     const uint64_t t0 = pma_hal_time_us();
     sleep_us(3000);
-    assert_true(pma_hal_time_us() - t0 >= 3000u);
+    TEST_ASSERT_GREATER_OR_EQUAL_UINT64(3000u, pma_hal_time_us() - t0);
 }
 
-static void test_tick_rules(void **state)
+static void test_tick_rules(void)
 {
-    (void)state;
+    init_no_can();
     uint32_t late = 99;
     assert_status(pma_hal_tick_wait(&late), PMA_ERR_NOT_READY); /* not started */
-    assert_int_equal(late, 99);
+    TEST_ASSERT_EQUAL_INT(99, late);
     assert_status(pma_hal_tick_start(0), PMA_ERR_RANGE);
     assert_status(pma_hal_tick_wait(&late), PMA_ERR_NOT_READY);
     assert_status(pma_hal_tick_start(PERIOD_US), PMA_OK);
@@ -70,9 +70,9 @@ static void test_tick_rules(void **state)
  * boundary when it slept or was 1 late, n boundaries when n - 1 were skipped:
  * after calls with late_ticks l_i the clock has passed
  * start + period x sum(max(1, l_i)). */
-static void test_tick_boundaries(void **state)
+static void test_tick_boundaries(void)
 {
-    (void)state;
+    init_no_can();
     const uint64_t before_start = pma_hal_time_us();
     assert_status(pma_hal_tick_start(PERIOD_US), PMA_OK);
     uint64_t boundaries = 0;
@@ -80,7 +80,8 @@ static void test_tick_boundaries(void **state)
         uint32_t late = 0;
         assert_status(pma_hal_tick_wait(&late), PMA_OK);
         boundaries += late > 0 ? late : 1u;
-        assert_true(pma_hal_time_us() >= before_start + boundaries * PERIOD_US);
+        TEST_ASSERT_GREATER_OR_EQUAL_UINT64(before_start + boundaries * PERIOD_US,
+                                            pma_hal_time_us());
     }
 }
 
@@ -88,36 +89,35 @@ static void test_tick_boundaries(void **state)
  * test then sleeps at least 5 P, so tick_wait sees now >= t0 + 5 P: the
  * boundaries t0 + P .. t0 + 5 P have passed, late_ticks >= 5 (four ticks
  * skipped, the fifth served late). */
-static void test_tick_late(void **state)
+static void test_tick_late(void)
 {
-    (void)state;
+    init_no_can();
     const uint64_t before_start = pma_hal_time_us();
     assert_status(pma_hal_tick_start(PERIOD_US), PMA_OK);
     sleep_us(5u * PERIOD_US);
     uint32_t late = 0;
     assert_status(pma_hal_tick_wait(&late), PMA_OK);
-    print_message("late_ticks after sleeping 5 periods: %u\n", (unsigned)late);
-    assert_true(late >= 5u);
+    printf("late_ticks after sleeping 5 periods: %u\n", (unsigned)late);
+    TEST_ASSERT_GREATER_OR_EQUAL_UINT32(5u, late);
     /* it served the latest boundary passed; the next call serves a later one */
     uint64_t boundaries = late;
     assert_status(pma_hal_tick_wait(&late), PMA_OK);
     boundaries += late > 0 ? late : 1u;
-    assert_true(pma_hal_time_us() >= before_start + boundaries * PERIOD_US);
+    TEST_ASSERT_GREATER_OR_EQUAL_UINT64(before_start + boundaries * PERIOD_US, pma_hal_time_us());
 
     /* restarting re-bases the boundaries on the new start */
     const uint64_t before_restart = pma_hal_time_us();
     assert_status(pma_hal_tick_start(3u * PERIOD_US), PMA_OK);
     assert_status(pma_hal_tick_wait(&late), PMA_OK);
-    assert_true(pma_hal_time_us() >= before_restart + 3u * PERIOD_US);
+    TEST_ASSERT_GREATER_OR_EQUAL_UINT64(before_restart + 3u * PERIOD_US, pma_hal_time_us());
 }
 
 int main(void)
 {
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_time_monotonic),
-        cmocka_unit_test_setup_teardown(test_tick_rules, setup, teardown),
-        cmocka_unit_test_setup_teardown(test_tick_boundaries, setup, teardown),
-        cmocka_unit_test_setup_teardown(test_tick_late, setup, teardown),
-    };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    UNITY_BEGIN();
+    RUN_TEST(test_time_monotonic);
+    RUN_TEST(test_tick_rules);
+    RUN_TEST(test_tick_boundaries);
+    RUN_TEST(test_tick_late);
+    return UNITY_END();
 }

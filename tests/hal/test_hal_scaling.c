@@ -23,21 +23,19 @@ static const pma_dac_scaling_t regulator = {
     .max_counts = 4095,
 };
 
-static void test_adc_converts_valid_range(void **state)
+static void test_adc_converts_valid_range(void)
 {
-    (void)state;
     float x = -99.0f;
     assert_status(pma_adc_counts_to_cm(&laser, 819, &x), PMA_OK); /* 4 mA: the sensor's 0 */
-    assert_true(fabsf(x) < 1e-5f);
+    TEST_ASSERT_LESS_THAN_FLOAT(1e-5f, fabsf(x));
     assert_status(pma_adc_counts_to_cm(&laser, 4094, &x), PMA_OK);
-    assert_true(fabsf(x - (-2.5f + 4094.0f * 10.0f / 3276.0f)) < 1e-5f);
+    TEST_ASSERT_LESS_THAN_FLOAT(1e-5f, fabsf(x - (-2.5f + 4094.0f * 10.0f / 3276.0f)));
     assert_status(pma_adc_counts_to_cm(&laser, 778, &x), PMA_OK); /* 3.8 mA: still usable */
-    assert_true(x < 0.0f);
+    TEST_ASSERT_LESS_THAN_FLOAT(0.0f, x);
 }
 
-static void test_adc_range_and_wire_break(void **state)
+static void test_adc_range_and_wire_break(void)
 {
-    (void)state;
     float x = 42.0f;
     assert_status(pma_adc_counts_to_cm(&laser, 4095, &x), PMA_ERR_RANGE);    /* clipped */
     assert_status(pma_adc_counts_to_cm(&laser, 65535, &x), PMA_ERR_RANGE);
@@ -45,26 +43,25 @@ static void test_adc_range_and_wire_break(void **state)
     assert_status(pma_adc_counts_to_cm(&laser, 737, &x), PMA_ERR_RANGE);
     assert_status(pma_adc_counts_to_cm(&laser, 736, &x), PMA_ERR_WIRE_BREAK);
     assert_status(pma_adc_counts_to_cm(&laser, 0, &x), PMA_ERR_WIRE_BREAK);  /* 0 mA */
-    assert_true(x == 42.0f); /* untouched on every error */
+    TEST_ASSERT_FLOAT_WITHIN(0.0f, 42.0f, x); /* untouched on every error */
 
     /* 0-10 V sensor without a live zero: no wire-break check, 0 is valid */
     pma_adc_scaling_t volt = {.offset_cm = 0.0f, .gain_cm_per_count = 0.01f,
                               .raw_min_counts = 0, .raw_max_counts = 1000,
                               .wire_break_below_counts = 0};
     assert_status(pma_adc_counts_to_cm(&volt, 0, &x), PMA_OK);
-    assert_true(x == 0.0f);
+    TEST_ASSERT_FLOAT_WITHIN(0.0f, 0.0f, x);
     assert_status(pma_adc_counts_to_cm(&volt, 1001, &x), PMA_ERR_RANGE);
 
     /* inverted mounting: negative gain */
     volt.offset_cm = 10.0f;
     volt.gain_cm_per_count = -0.01f;
     assert_status(pma_adc_counts_to_cm(&volt, 1000, &x), PMA_OK);
-    assert_true(fabsf(x) < 1e-5f);
+    TEST_ASSERT_LESS_THAN_FLOAT(1e-5f, fabsf(x));
 }
 
-static void test_adc_validation(void **state)
+static void test_adc_validation(void)
 {
-    (void)state;
     float x;
     assert_status(pma_adc_validate_scaling(&laser), PMA_OK);
     assert_status(pma_adc_validate_scaling(NULL), PMA_ERR_NULL);
@@ -87,67 +84,64 @@ static void test_adc_validation(void **state)
     assert_status(pma_adc_validate_scaling(&s), PMA_ERR_RANGE); /* above raw_min */
 }
 
-static void test_adc_inverse(void **state)
+static void test_adc_inverse(void)
 {
-    (void)state;
     uint16_t raw = 1;
     for (uint16_t r = 778; r <= 4094; r = (uint16_t)(r + 97)) {
         float x;
         assert_status(pma_adc_counts_to_cm(&laser, r, &x), PMA_OK);
         assert_status(pma_adc_cm_to_counts(&laser, x, &raw), PMA_OK);
-        assert_int_equal(raw, r);
+        TEST_ASSERT_EQUAL_INT(r, raw);
     }
     assert_status(pma_adc_cm_to_counts(&laser, -100.0f, &raw), PMA_OK);
-    assert_int_equal(raw, 778); /* saturated to the valid range */
+    TEST_ASSERT_EQUAL_INT(778, raw); /* saturated to the valid range */
     assert_status(pma_adc_cm_to_counts(&laser, 1e30f, &raw), PMA_OK);
-    assert_int_equal(raw, 4094);
+    TEST_ASSERT_EQUAL_INT(4094, raw);
     raw = 7;
     assert_status(pma_adc_cm_to_counts(&laser, NAN, &raw), PMA_ERR_NOT_FINITE);
     assert_status(pma_adc_cm_to_counts(&laser, -INFINITY, &raw), PMA_ERR_NOT_FINITE);
-    assert_int_equal(raw, 7);
+    TEST_ASSERT_EQUAL_INT(7, raw);
 }
 
-static void test_dac_scaling_and_saturation(void **state)
+static void test_dac_scaling_and_saturation(void)
 {
-    (void)state;
     uint16_t c = 1;
     assert_status(pma_dac_kpa_to_counts(&regulator, 0.0f, &c), PMA_OK);
-    assert_int_equal(c, 0);
+    TEST_ASSERT_EQUAL_INT(0, c);
     assert_status(pma_dac_kpa_to_counts(&regulator, 200.0f, &c), PMA_OK);
-    assert_int_equal(c, 1365);
+    TEST_ASSERT_EQUAL_INT(1365, c);
     assert_status(pma_dac_kpa_to_counts(&regulator, 600.0f, &c), PMA_OK);
-    assert_int_equal(c, 4095);
+    TEST_ASSERT_EQUAL_INT(4095, c);
     assert_status(pma_dac_kpa_to_counts(&regulator, 100.1f, &c), PMA_OK);
-    assert_int_equal(c, 683); /* 683.18: rounded to nearest */
+    TEST_ASSERT_EQUAL_INT(683, c); /* 683.18: rounded to nearest */
     assert_status(pma_dac_kpa_to_counts(&regulator, 100.03f, &c), PMA_OK);
-    assert_int_equal(c, 683); /* 682.70 */
+    TEST_ASSERT_EQUAL_INT(683, c); /* 682.70 */
     /* saturation at both ends, for any finite input */
     assert_status(pma_dac_kpa_to_counts(&regulator, -50.0f, &c), PMA_OK);
-    assert_int_equal(c, 0);
+    TEST_ASSERT_EQUAL_INT(0, c);
     assert_status(pma_dac_kpa_to_counts(&regulator, 601.0f, &c), PMA_OK);
-    assert_int_equal(c, 4095);
+    TEST_ASSERT_EQUAL_INT(4095, c);
     assert_status(pma_dac_kpa_to_counts(&regulator, 3e38f, &c), PMA_OK); /* product overflows */
-    assert_int_equal(c, 4095);
+    TEST_ASSERT_EQUAL_INT(4095, c);
     assert_status(pma_dac_kpa_to_counts(&regulator, -3e38f, &c), PMA_OK);
-    assert_int_equal(c, 0);
+    TEST_ASSERT_EQUAL_INT(0, c);
     /* a narrower output window (e.g. a 2-8 V regulator input) */
     pma_dac_scaling_t w = regulator;
     w.min_counts = 819;
     w.max_counts = 3276;
     assert_status(pma_dac_kpa_to_counts(&w, 0.0f, &c), PMA_OK);
-    assert_int_equal(c, 819);
+    TEST_ASSERT_EQUAL_INT(819, c);
     assert_status(pma_dac_kpa_to_counts(&w, 590.0f, &c), PMA_OK);
-    assert_int_equal(c, 3276);
+    TEST_ASSERT_EQUAL_INT(3276, c);
     /* NaN and infinity: error, output untouched */
     c = 1234;
     assert_status(pma_dac_kpa_to_counts(&regulator, NAN, &c), PMA_ERR_NOT_FINITE);
     assert_status(pma_dac_kpa_to_counts(&regulator, INFINITY, &c), PMA_ERR_NOT_FINITE);
-    assert_int_equal(c, 1234);
+    TEST_ASSERT_EQUAL_INT(1234, c);
 }
 
-static void test_dac_validation(void **state)
+static void test_dac_validation(void)
 {
-    (void)state;
     uint16_t c;
     assert_status(pma_dac_validate_scaling(&regulator), PMA_OK);
     assert_status(pma_dac_validate_scaling(NULL), PMA_ERR_NULL);
@@ -166,13 +160,12 @@ static void test_dac_validation(void **state)
 
 int main(void)
 {
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_adc_converts_valid_range),
-        cmocka_unit_test(test_adc_range_and_wire_break),
-        cmocka_unit_test(test_adc_validation),
-        cmocka_unit_test(test_adc_inverse),
-        cmocka_unit_test(test_dac_scaling_and_saturation),
-        cmocka_unit_test(test_dac_validation),
-    };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    UNITY_BEGIN();
+    RUN_TEST(test_adc_converts_valid_range);
+    RUN_TEST(test_adc_range_and_wire_break);
+    RUN_TEST(test_adc_validation);
+    RUN_TEST(test_adc_inverse);
+    RUN_TEST(test_dac_scaling_and_saturation);
+    RUN_TEST(test_dac_validation);
+    return UNITY_END();
 }

@@ -6,10 +6,9 @@
 
 #include "pma/hal.h"
 
-static void test_every_function_is_present(void **state)
+static void test_every_function_is_present(void)
 {
-    (void)state;
-    assert_string_equal(pma_hal_port_name(), "template");
+    TEST_ASSERT_EQUAL_STRING("template", pma_hal_port_name());
     assert_status(pma_hal_init(NULL), PMA_ERR_NOT_IMPLEMENTED);
     const pma_hal_config_t cfg = {.can_bitrate_bps = 500000u, .port = NULL};
     assert_status(pma_hal_init(&cfg), PMA_ERR_NOT_IMPLEMENTED);
@@ -28,7 +27,7 @@ static void test_every_function_is_present(void **state)
     assert_status(pma_hal_can_status(&st), PMA_ERR_NOT_IMPLEMENTED);
     assert_status(pma_hal_can_recover(), PMA_ERR_NOT_IMPLEMENTED);
 
-    assert_true(pma_hal_time_us() == 0);
+    TEST_ASSERT_EQUAL_UINT64(0, pma_hal_time_us());
     uint32_t late;
     assert_status(pma_hal_tick_start(1000), PMA_ERR_NOT_IMPLEMENTED);
     assert_status(pma_hal_tick_wait(&late), PMA_ERR_NOT_IMPLEMENTED);
@@ -43,14 +42,13 @@ static void test_every_function_is_present(void **state)
 
     assert_status(pma_hal_watchdog_start(100), PMA_ERR_NOT_IMPLEMENTED);
     pma_hal_watchdog_kick();
-    assert_int_equal(pma_hal_reset_cause(), PMA_RESET_UNKNOWN);
+    TEST_ASSERT_EQUAL_INT(PMA_RESET_UNKNOWN, pma_hal_reset_cause());
     pma_hal_deinit();
 }
 
 int main(void)
 {
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_every_function_is_present),
-    };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    UNITY_BEGIN();
+    RUN_TEST(test_every_function_is_present);
+    return UNITY_END();
 }

@@ -6,11 +6,10 @@
 
 static pma_pstore_t ps;
 
-static int setup(void **state)
+/* Every test: fresh devices and an empty store. */
+void setUp(void)
 {
-    (void)state;
     fresh(&ps);
-    return 0;
 }
 
 static void expect_load(uint32_t seed, uint32_t len, uint32_t seq, uint8_t slot, uint8_t valid)
@@ -18,26 +17,25 @@ static void expect_load(uint32_t seed, uint32_t len, uint32_t seq, uint8_t slot,
     pma_pstore_info_t info;
     memset(blob, 0, sizeof blob);
     assert_status(pma_pstore_load(&ps, blob, sizeof blob, &info), PMA_OK);
-    assert_int_equal(info.len, len);
-    assert_true(blob_is(seed, len));
-    assert_int_equal(info.blob_version, (uint16_t)seed);
-    assert_int_equal(info.sequence, seq);
-    assert_int_equal(info.slot, slot);
-    assert_int_equal(info.valid_slots, valid);
+    TEST_ASSERT_EQUAL_INT(len, info.len);
+    TEST_ASSERT_TRUE(blob_is(seed, len));
+    TEST_ASSERT_EQUAL_INT((uint16_t)seed, info.blob_version);
+    TEST_ASSERT_EQUAL_INT(seq, info.sequence);
+    TEST_ASSERT_EQUAL_INT(slot, info.slot);
+    TEST_ASSERT_EQUAL_INT(valid, info.valid_slots);
 }
 
-static void test_init_checks(void **state)
+static void test_init_checks(void)
 {
-    (void)state;
     pma_pstore_t p;
     assert_status(pma_pstore_init(NULL, 0, 1), PMA_ERR_NULL);
     assert_status(pma_pstore_init(&p, T_FIRST, 0), PMA_ERR_RANGE);
     assert_status(pma_pstore_init(&p, 3, T_BPS), PMA_ERR_RANGE);      /* slot B past the end */
     assert_status(pma_pstore_init(&p, T_BLOCKS + 1u, 1), PMA_ERR_RANGE);
     assert_status(pma_pstore_init(&p, 0, T_BLOCKS / 2u), PMA_OK);
-    assert_int_equal(p.capacity, PMA_PSTORE_MAX_BLOB_BYTES);
+    TEST_ASSERT_EQUAL_INT(PMA_PSTORE_MAX_BLOB_BYTES, p.capacity);
     assert_status(pma_pstore_init(&p, 0, 1), PMA_OK);                /* a 64-byte slot */
-    assert_int_equal(p.capacity, T_BLOCK - 20u);
+    TEST_ASSERT_EQUAL_INT(T_BLOCK - 20u, p.capacity);
     /* a program size above the chunk buffer */
     const pma_nvm_geometry_t big = {.block_size = 256, .block_count = 4, .program_size = 64};
     assert_status(pma_fake_nvm_attach(nvm_mem, sizeof nvm_mem, &big), PMA_OK);
@@ -45,14 +43,13 @@ static void test_init_checks(void **state)
     /* not ready: neither the HAL nor the store */
     pma_hal_deinit();
     assert_status(pma_pstore_init(&p, 0, 1), PMA_ERR_NOT_READY);
-    assert_false(p.ready);
+    TEST_ASSERT_FALSE(p.ready);
     assert_status(pma_pstore_load(&p, blob, sizeof blob, NULL), PMA_ERR_NOT_READY);
     assert_status(pma_pstore_save(&p, blob, 1, 0), PMA_ERR_NOT_READY);
 }
 
-static void test_empty_store_gives_defaults_code(void **state)
+static void test_empty_store_gives_defaults_code(void)
 {
-    (void)state;
     pma_pstore_info_t info;
     assert_status(pma_pstore_load(&ps, blob, sizeof blob, &info), PMA_ERR_NO_RECORD);
     assert_status(pma_pstore_load(&ps, NULL, sizeof blob, &info), PMA_ERR_NULL);
@@ -60,9 +57,8 @@ static void test_empty_store_gives_defaults_code(void **state)
     assert_status(pma_pstore_save(&ps, NULL, 4, 0), PMA_ERR_NULL);
 }
 
-static void test_saves_alternate_slots(void **state)
+static void test_saves_alternate_slots(void)
 {
-    (void)state;
     save_seed(&ps, 11, 100);
     expect_load(11, 100, 1, 0, 0x1);
     save_seed(&ps, 12, 512);
@@ -73,66 +69,62 @@ static void test_saves_alternate_slots(void **state)
     save_seed(&ps, 14, 0);
     expect_load(14, 0, 4, 1, 0x3);
     /* nothing outside the two slots was touched */
-    for (size_t i = 0; i < T_BLOCK; ++i) assert_int_equal(nvm_mem[i], 0xFF);
+    for (size_t i = 0; i < T_BLOCK; ++i) TEST_ASSERT_EQUAL_HEX8(0xFF, nvm_mem[i]);
     for (size_t i = (T_FIRST + 2 * T_BPS) * T_BLOCK; i < sizeof nvm_mem; ++i) {
-        assert_int_equal(nvm_mem[i], 0xFF);
+        TEST_ASSERT_EQUAL_HEX8(0xFF, nvm_mem[i]);
     }
 }
 
 /* The bytes in NVM are exactly the layout documented in pstore.h. */
-static void test_record_layout(void **state)
+static void test_record_layout(void)
 {
-    (void)state;
     save_seed(&ps, 0x1234, 37);
     const uint8_t *p = slot_mem(0);
     const uint8_t head[16] = {0x50, 0x4D, 0x53, 0x50, 1, 0, 0x34, 0x12, 1, 0, 0, 0, 37, 0, 0, 0};
-    assert_memory_equal(p, head, 16);
-    for (size_t i = 0; i < 37; ++i) assert_int_equal(p[16 + i], pattern_byte(0x1234, i));
+    TEST_ASSERT_EQUAL_MEMORY(head, p, 16);
+    for (size_t i = 0; i < 37; ++i) TEST_ASSERT_EQUAL_HEX8(pattern_byte(0x1234, i), p[16 + i]);
     const uint32_t crc = pma_crc32(p, 16 + 37);
-    assert_int_equal(p[53] | p[54] << 8 | p[55] << 16 | (uint32_t)p[56] << 24, crc);
-    for (size_t i = 57; i < T_BPS * T_BLOCK; ++i) assert_int_equal(p[i], 0xFF);
+    TEST_ASSERT_EQUAL_HEX32(crc, p[53] | p[54] << 8 | p[55] << 16 | (uint32_t)p[56] << 24);
+    for (size_t i = 57; i < T_BPS * T_BLOCK; ++i) TEST_ASSERT_EQUAL_HEX8(0xFF, p[i]);
     /* and the encoder of the tests agrees with it */
     craft_record(1, 2, 0x4321, 37);
     expect_load(0x4321, 37, 2, 1, 0x3);
 }
 
-static void test_zero_length_and_small_buffer(void **state)
+static void test_zero_length_and_small_buffer(void)
 {
-    (void)state;
     assert_status(pma_pstore_save(&ps, NULL, 0, 5), PMA_OK);
     pma_pstore_info_t info;
     assert_status(pma_pstore_load(&ps, blob, 0, &info), PMA_OK);
-    assert_int_equal(info.len, 0);
-    assert_int_equal(info.blob_version, 5);
+    TEST_ASSERT_EQUAL_INT(0, info.len);
+    TEST_ASSERT_EQUAL_INT(5, info.blob_version);
     save_seed(&ps, 3, 200);
     assert_status(pma_pstore_load(&ps, blob, 199, &info), PMA_ERR_RANGE);
     assert_status(pma_pstore_load(&ps, blob, 200, NULL), PMA_OK);
-    assert_true(blob_is(3, 200));
+    TEST_ASSERT_TRUE(blob_is(3, 200));
 }
 
-static void test_oversized_rejected_changes_nothing(void **state)
+static void test_oversized_rejected_changes_nothing(void)
 {
-    (void)state;
     save_seed(&ps, 21, 300);
     const uint32_t crc_before = pma_crc32(nvm_mem, sizeof nvm_mem);
     const uint32_t ops_before = pma_fake_nvm_op_count();
     /* (blob holds only the maximum: an oversized save must not even read it) */
     assert_status(pma_pstore_save(&ps, blob, PMA_PSTORE_MAX_BLOB_BYTES + 1u, 1), PMA_ERR_RANGE);
-    assert_int_equal(pma_fake_nvm_op_count(), ops_before);
-    assert_int_equal(pma_crc32(nvm_mem, sizeof nvm_mem), crc_before);
+    TEST_ASSERT_EQUAL_INT(ops_before, pma_fake_nvm_op_count());
+    TEST_ASSERT_EQUAL_HEX32(crc_before, pma_crc32(nvm_mem, sizeof nvm_mem));
     expect_load(21, 300, 1, 0, 0x1);
     /* a smaller layout has a smaller capacity */
     pma_pstore_t small;
     assert_status(pma_pstore_init(&small, T_FIRST, 2), PMA_OK); /* 128-byte slots */
-    assert_int_equal(small.capacity, 108);
+    TEST_ASSERT_EQUAL_INT(108, small.capacity);
     assert_status(pma_pstore_save(&small, blob, 109, 1), PMA_ERR_RANGE);
-    assert_int_equal(pma_crc32(nvm_mem, sizeof nvm_mem), crc_before);
+    TEST_ASSERT_EQUAL_HEX32(crc_before, pma_crc32(nvm_mem, sizeof nvm_mem));
 }
 
 /* Corrupting the newest record anywhere makes load fall back to the other. */
-static void test_corruption_falls_back(void **state)
+static void test_corruption_falls_back(void)
 {
-    (void)state;
     /* byte offsets in the newest record (len 40): magic, format, blob version,
      * sequence, length, payload start/end, CRC */
     const size_t where[] = {0, 3, 4, 6, 8, 11, 12, 15, 16, 55, 56, 59};
@@ -147,9 +139,8 @@ static void test_corruption_falls_back(void **state)
     }
 }
 
-static void test_both_corrupt_gives_defaults_code(void **state)
+static void test_both_corrupt_gives_defaults_code(void)
 {
-    (void)state;
     save_seed(&ps, 41, 64);
     save_seed(&ps, 42, 64);
     slot_mem(0)[20] ^= 0x01;            /* payload of A */
@@ -173,9 +164,8 @@ static void test_both_corrupt_gives_defaults_code(void **state)
 
 /* Save goes to the slot without the newest valid record: a corrupt newer
  * slot is overwritten, the valid older one kept. */
-static void test_save_replaces_corrupt_slot(void **state)
+static void test_save_replaces_corrupt_slot(void)
 {
-    (void)state;
     save_seed(&ps, 51, 64);
     save_seed(&ps, 52, 64);
     slot_mem(1)[30] ^= 0x04;
@@ -186,9 +176,8 @@ static void test_save_replaces_corrupt_slot(void **state)
 }
 
 /* Sequence numbers wrap: serial-number arithmetic picks the newer. */
-static void test_sequence_wraparound(void **state)
+static void test_sequence_wraparound(void)
 {
-    (void)state;
     craft_record(0, 0xFFFFFFFFu, 61, 20);
     craft_record(1, 0x00000000u, 62, 20);
     expect_load(62, 20, 0, 1, 0x3);
@@ -208,15 +197,14 @@ static void test_sequence_wraparound(void **state)
 
 /* A worn NVM byte: the read-back differs, the save reports it, the
  * previous record stays the newest and the half-good slot is erased. */
-static void test_verify_failure(void **state)
+static void test_verify_failure(void)
 {
-    (void)state;
     save_seed(&ps, 71, 64);
     pma_fake_nvm_stuck_byte(T_FIRST + T_BPS, 40, true); /* slot B, payload */
     fill_blob(72, 64);
     assert_status(pma_pstore_save(&ps, blob, 64, 72), PMA_ERR_VERIFY);
     expect_load(71, 64, 1, 0, 0x1);
-    for (size_t i = 0; i < T_BLOCK; ++i) assert_int_equal(slot_mem(1)[i], 0xFF);
+    for (size_t i = 0; i < T_BLOCK; ++i) TEST_ASSERT_EQUAL_HEX8(0xFF, slot_mem(1)[i]);
     pma_fake_nvm_stuck_byte(0, 0, false);
     save_seed(&ps, 73, 64);
     expect_load(73, 64, 2, 1, 0x3);
@@ -224,9 +212,8 @@ static void test_verify_failure(void **state)
 
 /* A failing device: save changes nothing, load reports the failure rather
  * than "no record" when it could not read. */
-static void test_device_failure(void **state)
+static void test_device_failure(void)
 {
-    (void)state;
     pma_fake_nvm_cut_power(0, 0);
     assert_status(pma_hal_nvm_erase(T_BLOCKS - 1u), PMA_ERR_IO); /* power is gone */
     assert_status(pma_pstore_load(&ps, blob, sizeof blob, NULL), PMA_ERR_IO);
@@ -238,26 +225,25 @@ static void test_device_failure(void **state)
     assert_status(pma_hal_nvm_erase(T_BLOCKS - 1u), PMA_ERR_IO);
     const uint32_t ops = pma_fake_nvm_op_count();
     assert_status(pma_pstore_save(&ps, blob, 8, 1), PMA_ERR_IO);
-    assert_int_equal(pma_fake_nvm_op_count(), ops);
+    TEST_ASSERT_EQUAL_INT(ops, pma_fake_nvm_op_count());
     power_on(&ps);
     expect_load(81, 8, 1, 0, 0x1);
 }
 
 int main(void)
 {
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test_setup(test_init_checks, setup),
-        cmocka_unit_test_setup(test_empty_store_gives_defaults_code, setup),
-        cmocka_unit_test_setup(test_saves_alternate_slots, setup),
-        cmocka_unit_test_setup(test_record_layout, setup),
-        cmocka_unit_test_setup(test_zero_length_and_small_buffer, setup),
-        cmocka_unit_test_setup(test_oversized_rejected_changes_nothing, setup),
-        cmocka_unit_test_setup(test_corruption_falls_back, setup),
-        cmocka_unit_test_setup(test_both_corrupt_gives_defaults_code, setup),
-        cmocka_unit_test_setup(test_save_replaces_corrupt_slot, setup),
-        cmocka_unit_test_setup(test_sequence_wraparound, setup),
-        cmocka_unit_test_setup(test_verify_failure, setup),
-        cmocka_unit_test_setup(test_device_failure, setup),
-    };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    UNITY_BEGIN();
+    RUN_TEST(test_init_checks);
+    RUN_TEST(test_empty_store_gives_defaults_code);
+    RUN_TEST(test_saves_alternate_slots);
+    RUN_TEST(test_record_layout);
+    RUN_TEST(test_zero_length_and_small_buffer);
+    RUN_TEST(test_oversized_rejected_changes_nothing);
+    RUN_TEST(test_corruption_falls_back);
+    RUN_TEST(test_both_corrupt_gives_defaults_code);
+    RUN_TEST(test_save_replaces_corrupt_slot);
+    RUN_TEST(test_sequence_wraparound);
+    RUN_TEST(test_verify_failure);
+    RUN_TEST(test_device_failure);
+    return UNITY_END();
 }

@@ -94,13 +94,12 @@ static void cut_once(scenario_t sc, uint32_t old_len, uint32_t new_len, uint32_t
         const bool is_old = sc != EMPTY && info.sequence == old_seq && info.len == old_len &&
                             info.blob_version == SEED_OLD && blob_is(SEED_OLD, old_len);
         if (!is_new && !is_old) {
-            print_error("scenario %d%s, old %lu B, new %lu B: cut at op %lu of %lu, %lu permille: "
-                        "loaded seq %lu len %lu version %u\n", (int)sc, ecc ? " (ECC)" : "",
-                        (unsigned long)old_len,
-                        (unsigned long)new_len, (unsigned long)op, (unsigned long)ops,
-                        (unsigned long)permille, (unsigned long)info.sequence,
-                        (unsigned long)info.len, (unsigned)info.blob_version);
-            fail();
+            pma_test_fail("scenario %d%s, old %lu B, new %lu B: cut at op %lu of %lu, "
+                          "%lu permille: loaded seq %lu len %lu version %u", (int)sc,
+                          ecc ? " (ECC)" : "", (unsigned long)old_len, (unsigned long)new_len,
+                          (unsigned long)op, (unsigned long)ops, (unsigned long)permille,
+                          (unsigned long)info.sequence, (unsigned long)info.len,
+                          (unsigned)info.blob_version);
         }
         if (is_new) tally.saw_new++;
         if (is_old) tally.saw_old++;
@@ -109,7 +108,7 @@ static void cut_once(scenario_t sc, uint32_t old_len, uint32_t new_len, uint32_t
     fill_blob(SEED_AFTER, 33);
     assert_status(pma_pstore_save(&ps, blob, 33, SEED_AFTER), PMA_OK);
     assert_status(pma_pstore_load(&ps, blob, sizeof blob, &info), PMA_OK);
-    assert_true(info.blob_version == SEED_AFTER && info.len == 33 && blob_is(SEED_AFTER, 33));
+    TEST_ASSERT_TRUE(info.blob_version == SEED_AFTER && info.len == 33 && blob_is(SEED_AFTER, 33));
 }
 
 static void sweep_once(scenario_t sc)
@@ -124,7 +123,7 @@ static void sweep_once(scenario_t sc)
             fill_blob(SEED_NEW, new_len);
             assert_status(pma_pstore_save(&ps, blob, new_len, SEED_NEW), PMA_OK);
             const uint32_t ops = pma_fake_nvm_op_count() - before;
-            assert_true(ops >= 2); /* at least one erase and one program */
+            TEST_ASSERT_GREATER_OR_EQUAL_UINT32(2, ops); /* at least one erase and one program */
             for (uint32_t op = 0; op <= ops; ++op) {
                 for (size_t k = 0; k < sizeof permilles / sizeof permilles[0]; ++k) {
                     cut_once(sc, old_len, new_len, ops, op, permilles[k]);
@@ -143,11 +142,10 @@ static void sweep(scenario_t sc)
     sweep_once(sc);
 }
 
-static int reset_tally(void **state)
+/* Every test counts its own power cuts. */
+void setUp(void)
 {
-    (void)state;
     memset(&tally, 0, sizeof tally);
-    return 0;
 }
 
 static void report(const char *name)
@@ -156,54 +154,48 @@ static void report(const char *name)
            name, (unsigned long)tally.points, (unsigned long)tally.saw_old,
            (unsigned long)tally.saw_new, (unsigned long)tally.saw_none,
            (unsigned long)tally.corrupt_reads);
-    assert_true(tally.saw_new > 0);
-    assert_true(tally.corrupt_reads > 0);
-    assert_true(tally.saw_old > 0 || tally.saw_none > 0);
+    TEST_ASSERT_GREATER_THAN_UINT32(0, tally.saw_new);
+    TEST_ASSERT_GREATER_THAN_UINT32(0, tally.corrupt_reads);
+    TEST_ASSERT_TRUE(tally.saw_old > 0 || tally.saw_none > 0);
 }
 
-static void test_cut_empty_store(void **state)
+static void test_cut_empty_store(void)
 {
-    (void)state;
     sweep(EMPTY);
     report("empty store");
 }
 
-static void test_cut_one_record(void **state)
+static void test_cut_one_record(void)
 {
-    (void)state;
     sweep(ONE);
     report("one record");
 }
 
-static void test_cut_two_records(void **state)
+static void test_cut_two_records(void)
 {
-    (void)state;
     sweep(TWO);
     report("two records");
 }
 
-static void test_cut_after_torn_save(void **state)
+static void test_cut_after_torn_save(void)
 {
-    (void)state;
     sweep(TORN);
     report("torn slot");
 }
 
-static void test_cut_at_sequence_wrap(void **state)
+static void test_cut_at_sequence_wrap(void)
 {
-    (void)state;
     sweep(WRAP);
     report("sequence wrap");
 }
 
 int main(void)
 {
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test_setup(test_cut_empty_store, reset_tally),
-        cmocka_unit_test_setup(test_cut_one_record, reset_tally),
-        cmocka_unit_test_setup(test_cut_two_records, reset_tally),
-        cmocka_unit_test_setup(test_cut_after_torn_save, reset_tally),
-        cmocka_unit_test_setup(test_cut_at_sequence_wrap, reset_tally),
-    };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    UNITY_BEGIN();
+    RUN_TEST(test_cut_empty_store);
+    RUN_TEST(test_cut_one_record);
+    RUN_TEST(test_cut_two_records);
+    RUN_TEST(test_cut_after_torn_save);
+    RUN_TEST(test_cut_at_sequence_wrap);
+    return UNITY_END();
 }
