@@ -1,4 +1,4 @@
-/* Shared harness of the application tests (cmocka, fake HAL).
+/* Shared harness of the application tests (Unity, fake HAL).
  *
  * The application under test is one static pma_app_t (`app`, 744 bytes at the
  * time of writing; test_app_commands.c prints it), driven as on a board: frames built with the generated
@@ -12,14 +12,10 @@
 #ifndef PMA_APP_TEST_H
 #define PMA_APP_TEST_H
 
-#include <stdarg.h>
-#include <stddef.h>
-#include <setjmp.h>
-#include <stdint.h>
-#include <cmocka.h>
-
 #include <math.h>
 #include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
 #include <string.h>
 
 #include "actuator.h"
@@ -31,61 +27,19 @@
 #include "pma/hal_scaling.h"
 #include "pma/status.h"
 #include "pma_hal_fake.h"
+#include "pma_test.h"
 #include "supervisor.h"
-
-/* Compares status codes and prints their names on a mismatch. */
-#define assert_status(got, want)                                                         \
-    do {                                                                                  \
-        const int g_ = (got), w_ = (want);                                                \
-        if (g_ != w_) {                                                                   \
-            print_error("%s = %s (%d), expected %s (%d)\n", #got, pma_status_name(g_),    \
-                        g_, pma_status_name(w_), w_);                                     \
-            fail();                                                                       \
-        }                                                                                 \
-    } while (0)
-
-/* Compares application states and prints their names on a mismatch. */
-#define assert_state(got, want)                                                          \
-    do {                                                                                  \
-        const int g_ = (got), w_ = (want);                                                \
-        if (g_ != w_) {                                                                   \
-            print_error("%s = %s, expected %s\n", #got, pma_app_state_name(g_),           \
-                        pma_app_state_name(w_));                                          \
-            fail();                                                                       \
-        }                                                                                 \
-    } while (0)
-
-/* Compares fault codes and prints their names on a mismatch. */
-#define assert_fault(got, want)                                                          \
-    do {                                                                                  \
-        const int g_ = (got), w_ = (want);                                                \
-        if (g_ != w_) {                                                                   \
-            print_error("%s = %s, expected %s\n", #got, pma_fault_name(g_),               \
-                        pma_fault_name(w_));                                              \
-            fail();                                                                       \
-        }                                                                                 \
-    } while (0)
-
-/* Fails with the values printed when |got - want| > tol. */
-#define assert_near(got, want, tol)                                                       \
-    do {                                                                                  \
-        const double g_ = (double)(got), w_ = (double)(want), t_ = (double)(tol);         \
-        if (!(fabs(g_ - w_) <= t_)) {                                                     \
-            print_error("%s = %.9g, expected %.9g +- %.3g\n", #got, g_, w_, t_);          \
-            fail();                                                                       \
-        }                                                                                 \
-    } while (0)
 
 /* ------------------------------------------------------------ the rig -- */
 
-/* RAM: on the Cortex-M0 board newlib, cmocka and the fake HAL leave about
+/* RAM: on the Cortex-M0 board newlib, Unity and the fake HAL leave about
  * 2 KB of .data/.bss to a test (16 KB minus 6 KB stack, 4 KB minimum heap,
- * 3.4 KB libraries, 0.75 KB fake devices): pma_app_t (~740 bytes), the capture
- * below (~150) and, only in the tests that need storage, the fake NVM. A test
- * file that stores parameters defines T_NVM_BPS (blocks per slot) before
- * including this header; the others run without storage
- * (store_blocks_per_slot 0, as a platform without NVM). Parameter sets are
- * compared by their CRC-32 rather than kept as copies. */
+ * 3.3 KB libraries and board support, 0.8 KB fake devices): pma_app_t
+ * (~740 bytes), the capture below (~150) and, only in the tests that need
+ * storage, the fake NVM. A test file that stores parameters defines
+ * T_NVM_BPS (blocks per slot) before including this header; the others run
+ * without storage (store_blocks_per_slot 0, as a platform without NVM).
+ * Parameter sets are compared by their CRC-32 rather than kept as copies. */
 #define T_NODE 3u          /* node id of the device under test (not 0: addressing matters) */
 #define T_OTHER_NODE 5u    /* another node on the same bus */
 #define T_BLOCK 16u        /* fake NVM: 16-byte blocks, 8-byte program unit */
@@ -185,7 +139,7 @@ static inline void drain(void)
         cap.total++;
         if ((f.id & PMA_NODE_ID_MASK) != app.node_id) cap.foreign++;
     }
-    assert_int_equal(pma_fake_can_tx_overwritten(), 0); /* nothing lost from the log */
+    TEST_ASSERT_EQUAL_INT(0, pma_fake_can_tx_overwritten()); /* nothing lost from the log */
 }
 
 static inline uint32_t sent(uint16_t base_id)
@@ -197,7 +151,7 @@ static inline uint32_t sent(uint16_t base_id)
 static inline const pma_can_frame_t *last_frame(uint16_t base_id)
 {
     const int8_t slot = keep_slot[KIND(base_id)];
-    assert_true(slot >= 0);
+    TEST_ASSERT_GREATER_OR_EQUAL(0, slot);
     return &cap.kept[slot];
 }
 
@@ -285,19 +239,19 @@ static inline struct pma_proto_command_ack_t command(uint8_t cmd, uint8_t arg)
 {
     struct pma_proto_command_t m = {.command = cmd, .arg = arg};
     uint8_t d[8];
-    assert_true(pma_proto_command_pack(d, &m, sizeof d) == PMA_PROTO_COMMAND_LENGTH);
+    TEST_ASSERT_EQUAL_INT(PMA_PROTO_COMMAND_LENGTH, pma_proto_command_pack(d, &m, sizeof d));
     inject(PMA_PROTO_COMMAND_FRAME_ID, PMA_PROTO_COMMAND_LENGTH, d);
     cap_clear();
     step();
-    assert_int_equal(sent(PMA_PROTO_COMMAND_ACK_FRAME_ID), 1);
+    TEST_ASSERT_EQUAL_INT(1, sent(PMA_PROTO_COMMAND_ACK_FRAME_ID));
     const pma_can_frame_t *f = last_frame(PMA_PROTO_COMMAND_ACK_FRAME_ID);
-    assert_int_equal(f->id, PMA_PROTO_COMMAND_ACK_FRAME_ID | app.node_id);
-    assert_int_equal(f->dlc, PMA_PROTO_COMMAND_ACK_LENGTH);
+    TEST_ASSERT_EQUAL_HEX16(PMA_PROTO_COMMAND_ACK_FRAME_ID | app.node_id, f->id);
+    TEST_ASSERT_EQUAL_INT(PMA_PROTO_COMMAND_ACK_LENGTH, f->dlc);
     struct pma_proto_command_ack_t a;
     memset(&a, 0, sizeof a);
-    assert_int_equal(pma_proto_command_ack_unpack(&a, f->data, f->dlc), 0);
-    assert_int_equal(a.command, cmd);
-    assert_int_equal(a.arg, arg);
+    TEST_ASSERT_EQUAL_INT(0, pma_proto_command_ack_unpack(&a, f->data, f->dlc));
+    TEST_ASSERT_EQUAL_INT(cmd, a.command);
+    TEST_ASSERT_EQUAL_INT(arg, a.arg);
     return a;
 }
 
@@ -317,11 +271,11 @@ typedef struct presp {
 
 static inline presp_t decode_param_resp(const pma_can_frame_t *f)
 {
-    assert_int_equal(f->id, PMA_PROTO_PARAM_RESP_FRAME_ID | app.node_id);
-    assert_int_equal(f->dlc, PMA_PROTO_PARAM_RESP_LENGTH);
+    TEST_ASSERT_EQUAL_HEX16(PMA_PROTO_PARAM_RESP_FRAME_ID | app.node_id, f->id);
+    TEST_ASSERT_EQUAL_INT(PMA_PROTO_PARAM_RESP_LENGTH, f->dlc);
     struct pma_proto_param_resp_t m;
     memset(&m, 0, sizeof m);
-    assert_int_equal(pma_proto_param_resp_unpack(&m, f->data, f->dlc), 0);
+    TEST_ASSERT_EQUAL_INT(0, pma_proto_param_resp_unpack(&m, f->data, f->dlc));
     presp_t r;
     memset(&r, 0, sizeof r);
     r.op = m.op;
@@ -352,14 +306,14 @@ static inline presp_t param_req_raw(uint8_t op, uint8_t type, uint16_t id, pma_p
     m.value_u32 = v.u32;
     m.value_i32 = v.i32;
     uint8_t d[8];
-    assert_true(pma_proto_param_req_pack(d, &m, sizeof d) == PMA_PROTO_PARAM_REQ_LENGTH);
+    TEST_ASSERT_EQUAL_INT(PMA_PROTO_PARAM_REQ_LENGTH, pma_proto_param_req_pack(d, &m, sizeof d));
     inject(PMA_PROTO_PARAM_REQ_FRAME_ID, PMA_PROTO_PARAM_REQ_LENGTH, d);
     cap_clear();
     step();
-    assert_int_equal(sent(PMA_PROTO_PARAM_RESP_FRAME_ID), 1);
+    TEST_ASSERT_EQUAL_INT(1, sent(PMA_PROTO_PARAM_RESP_FRAME_ID));
     const presp_t r = decode_param_resp(last_frame(PMA_PROTO_PARAM_RESP_FRAME_ID));
-    assert_int_equal(r.op, op);
-    assert_int_equal(r.id, id);
+    TEST_ASSERT_EQUAL_INT(op, r.op);
+    TEST_ASSERT_EQUAL_INT(id, r.id);
     return r;
 }
 
@@ -393,7 +347,7 @@ static inline pma_param_value_t vi(int32_t x)
 static inline int set_param(uint16_t id, pma_param_value_t v)
 {
     const pma_param_desc_t *d = pma_param_find(id);
-    assert_non_null(d);
+    TEST_ASSERT_NOT_NULL(d);
     return param_req(PMA_PARAM_OP_SET, d->type, id, v).result;
 }
 
@@ -420,13 +374,13 @@ static inline int whole_op(uint8_t op)
 /* The last HEARTBEAT in cap (one must have been sent). */
 static inline struct pma_proto_heartbeat_t last_heartbeat(void)
 {
-    assert_true(sent(PMA_PROTO_HEARTBEAT_FRAME_ID) > 0);
+    TEST_ASSERT_GREATER_THAN(0, sent(PMA_PROTO_HEARTBEAT_FRAME_ID));
     const pma_can_frame_t *f = last_frame(PMA_PROTO_HEARTBEAT_FRAME_ID);
-    assert_int_equal(f->id, PMA_PROTO_HEARTBEAT_FRAME_ID | app.node_id);
-    assert_int_equal(f->dlc, PMA_PROTO_HEARTBEAT_LENGTH);
+    TEST_ASSERT_EQUAL_HEX16(PMA_PROTO_HEARTBEAT_FRAME_ID | app.node_id, f->id);
+    TEST_ASSERT_EQUAL_INT(PMA_PROTO_HEARTBEAT_LENGTH, f->dlc);
     struct pma_proto_heartbeat_t h;
     memset(&h, 0, sizeof h);
-    assert_int_equal(pma_proto_heartbeat_unpack(&h, f->data, f->dlc), 0);
+    TEST_ASSERT_EQUAL_INT(0, pma_proto_heartbeat_unpack(&h, f->data, f->dlc));
     return h;
 }
 
@@ -443,13 +397,13 @@ static inline struct pma_proto_heartbeat_t next_heartbeat(void)
 /* The last PLANT_ACTUATOR in cap (one must have been sent). */
 static inline struct pma_proto_plant_actuator_t last_actuator(void)
 {
-    assert_true(sent(PMA_PROTO_PLANT_ACTUATOR_FRAME_ID) > 0);
+    TEST_ASSERT_GREATER_THAN(0, sent(PMA_PROTO_PLANT_ACTUATOR_FRAME_ID));
     const pma_can_frame_t *f = last_frame(PMA_PROTO_PLANT_ACTUATOR_FRAME_ID);
-    assert_int_equal(f->id, PMA_PROTO_PLANT_ACTUATOR_FRAME_ID | app.node_id);
-    assert_int_equal(f->dlc, PMA_PROTO_PLANT_ACTUATOR_LENGTH);
+    TEST_ASSERT_EQUAL_HEX16(PMA_PROTO_PLANT_ACTUATOR_FRAME_ID | app.node_id, f->id);
+    TEST_ASSERT_EQUAL_INT(PMA_PROTO_PLANT_ACTUATOR_LENGTH, f->dlc);
     struct pma_proto_plant_actuator_t m;
     memset(&m, 0, sizeof m);
-    assert_int_equal(pma_proto_plant_actuator_unpack(&m, f->data, f->dlc), 0);
+    TEST_ASSERT_EQUAL_INT(0, pma_proto_plant_actuator_unpack(&m, f->data, f->dlc));
     return m;
 }
 
@@ -458,7 +412,8 @@ static inline void send_sample(uint8_t seq, uint16_t raw)
 {
     struct pma_proto_plant_sensor_t m = {.seq = seq, .raw_counts = raw};
     uint8_t d[8];
-    assert_true(pma_proto_plant_sensor_pack(d, &m, sizeof d) == PMA_PROTO_PLANT_SENSOR_LENGTH);
+    TEST_ASSERT_EQUAL_INT(PMA_PROTO_PLANT_SENSOR_LENGTH,
+                          pma_proto_plant_sensor_pack(d, &m, sizeof d));
     inject(PMA_PROTO_PLANT_SENSOR_FRAME_ID, PMA_PROTO_PLANT_SENSOR_LENGTH, d);
 }
 
@@ -466,8 +421,8 @@ static inline void send_host_heartbeat(uint8_t counter)
 {
     struct pma_proto_host_heartbeat_t m = {.counter = counter};
     uint8_t d[8];
-    assert_true(pma_proto_host_heartbeat_pack(d, &m, sizeof d) ==
-                PMA_PROTO_HOST_HEARTBEAT_LENGTH);
+    TEST_ASSERT_EQUAL_INT(PMA_PROTO_HOST_HEARTBEAT_LENGTH,
+                          pma_proto_host_heartbeat_pack(d, &m, sizeof d));
     inject(PMA_PROTO_HOST_HEARTBEAT_FRAME_ID, PMA_PROTO_HOST_HEARTBEAT_LENGTH, d);
 }
 
@@ -479,7 +434,7 @@ static inline uint16_t dac_now(void)
 {
     pma_fake_dac_write_t w;
     assert_status(pma_fake_dac_log(0, &w), PMA_OK);
-    assert_true(w.time_us == pma_hal_time_us());
+    TEST_ASSERT_EQUAL_UINT64(pma_hal_time_us(), w.time_us);
     return w.counts;
 }
 

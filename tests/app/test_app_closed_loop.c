@@ -72,6 +72,13 @@ static board_t board;
 static uint32_t led_writes;
 static int led_level = -1;
 
+/* A failed assertion ends a test before its own `use_board = 0`: the next test must not
+ * inherit the board glue. */
+void tearDown(void)
+{
+    use_board = 0;
+}
+
 void board_led_write(int on)
 {
     led_level = on;
@@ -88,8 +95,8 @@ static void loop_step(void)
     }
     assert_status(board_step(&board, &app), PMA_OK);
     drain();
-    assert_int_equal(led_level, board_led_on(app.state, pma_hal_time_us() / 1000u));
-    assert_int_equal(board.led, led_level);
+    TEST_ASSERT_EQUAL_INT(board_led_on(app.state, pma_hal_time_us() / 1000u), led_level);
+    TEST_ASSERT_EQUAL_INT(led_level, board.led);
 }
 
 /* A fresh node: the test harness's start, or the board's. */
@@ -106,18 +113,18 @@ static void start_node(uint8_t bridge, float x_cm)
     led_level = -1;
     assert_status(board_start(&board, &app, NULL), PMA_OK);
     plat = app.plat; /* the board's platform, for the harness's helpers */
-    assert_int_equal(plat.plant_bridge, 0);            /* never forced on a board */
-    assert_int_equal(plat.store_blocks_per_slot, BOARD_STORE_BLOCKS_PER_SLOT);
-    assert_int_equal(plat.watchdog_ms, BOARD_WATCHDOG_MS);
-    assert_true(pma_fake_watchdog_running());
-    assert_int_equal(pma_fake_can_bitrate_bps(), PMA_HAL_CAN_DEFAULT_BITRATE_BPS);
+    TEST_ASSERT_EQUAL_INT(0, plat.plant_bridge); /* never forced on a board */
+    TEST_ASSERT_EQUAL_INT(BOARD_STORE_BLOCKS_PER_SLOT, plat.store_blocks_per_slot);
+    TEST_ASSERT_EQUAL_INT(BOARD_WATCHDOG_MS, plat.watchdog_ms);
+    TEST_ASSERT_TRUE(pma_fake_watchdog_running());
+    TEST_ASSERT_EQUAL_INT(PMA_HAL_CAN_DEFAULT_BITRATE_BPS, pma_fake_can_bitrate_bps());
     assert_state(app.state, PMA_STATE_IDLE);
-    assert_int_equal(led_writes, 1u);
+    TEST_ASSERT_EQUAL_INT(1u, led_writes);
     cap_clear();
     drain();
     if (bridge) {
         set_u32(PMA_PARAM_SYS_PLANT_BRIDGE, 1u); /* allowed: disarmed */
-        assert_int_equal(pma_app_bridge_on(&app), 1);
+        TEST_ASSERT_EQUAL_INT(1, pma_app_bridge_on(&app));
     }
 }
 
@@ -133,8 +140,8 @@ static void tick_with_plant(void)
         cap_clear();
         loop_step();
         const struct pma_proto_plant_actuator_t m = last_actuator();
-        assert_int_equal(m.seq, seq);
-        assert_int_equal(m.sample, PMA_SAMPLE_NEW);
+        TEST_ASSERT_EQUAL_INT(seq, m.seq);
+        TEST_ASSERT_EQUAL_INT(PMA_SAMPLE_NEW, m.sample);
         counts = m.dac_counts;
     } else {
         pma_fake_adc_set(raw);
@@ -192,9 +199,8 @@ static result_t run(uint8_t bridge, uint32_t mode, uint32_t ref, float offset_cm
         const double x_sampled = pl.x;
         tick_with_plant();
         if (app.state != PMA_STATE_RUNNING) {
-            print_error("left RUNNING at t = %.3f s: %s, fault %s\n", (double)app.ctrl.out.t_s,
-                        pma_app_state_name(app.state), pma_fault_name(app.fault));
-            fail();
+            pma_test_fail("left RUNNING at t = %.3f s: %s, fault %s", (double)app.ctrl.out.t_s,
+                          pma_app_state_name(app.state), pma_fault_name(app.fault));
         }
         const double t = (double)app.ctrl.out.t_s;
         const double xr = xr_of(t, offset_cm);
@@ -207,11 +213,11 @@ static result_t run(uint8_t bridge, uint32_t mode, uint32_t ref, float offset_cm
         if (pl.x > r.max_x) r.max_x = pl.x;
     }
     assert_fault(app.fault, PMA_FAULT_NONE);
-    print_message("%s %s mode %lu: max|e| after t_u %.4f cm, final |e| %.4f cm, x in [%.3f, %.3f] "
-                  "cm, barrier ticks %lu\n", bridge ? "bridge" : "adc",
-                  ref == PMA_REF_KIND_CASE1 ? "CASE1" : "HOLD", (unsigned long)mode,
-                  r.max_e_after_tu, r.final_abs_e, r.min_x, r.max_x,
-                  (unsigned long)r.barrier_ticks);
+    printf("%s %s mode %lu: max|e| after t_u %.4f cm, final |e| %.4f cm, x in [%.3f, %.3f] "
+           "cm, barrier ticks %lu\n", bridge ? "bridge" : "adc",
+           ref == PMA_REF_KIND_CASE1 ? "CASE1" : "HOLD", (unsigned long)mode,
+           r.max_e_after_tu, r.final_abs_e, r.min_x, r.max_x,
+           (unsigned long)r.barrier_ticks);
     return r;
 }
 
@@ -227,82 +233,75 @@ static double xr_hold(double t, float offset)
     return (double)offset;
 }
 
-static void test_ppc_case1_bridge(void **state)
+static void test_ppc_case1_bridge(void)
 {
-    (void)state;
     const result_t r = run(1, PMA_CTRL_MODE_PPC, PMA_REF_KIND_CASE1, -1.5f, 10, 2.0f, xr_case1);
-    assert_true(r.max_e_after_tu < 0.2);
-    assert_true(r.min_x > -3.0 && r.max_x < 0.0); /* the output constraint held */
+    TEST_ASSERT_TRUE(r.max_e_after_tu < 0.2);
+    TEST_ASSERT_TRUE(r.min_x > -3.0 && r.max_x < 0.0); /* the output constraint held */
 }
 
-static void test_ppc_hold_adc(void **state)
+static void test_ppc_hold_adc(void)
 {
-    (void)state;
     const result_t r = run(0, PMA_CTRL_MODE_PPC, PMA_REF_KIND_HOLD, -2.0f, 6, 2.0f, xr_hold);
-    assert_true(r.max_e_after_tu < 0.2);
-    assert_true(r.final_abs_e < 0.05);
-    assert_true(r.min_x > -3.0 && r.max_x < 0.0);
+    TEST_ASSERT_TRUE(r.max_e_after_tu < 0.2);
+    TEST_ASSERT_TRUE(r.final_abs_e < 0.05);
+    TEST_ASSERT_TRUE(r.min_x > -3.0 && r.max_x < 0.0);
 }
 
-static void test_mfac_hold_adc(void **state)
+static void test_mfac_hold_adc(void)
 {
-    (void)state;
     const result_t r = run(0, PMA_CTRL_MODE_MFAC, PMA_REF_KIND_HOLD, -2.0f, 6, 2.0f, xr_hold);
-    assert_true(r.final_abs_e < 0.05);
-    assert_true(r.min_x > -3.5 && r.max_x < 0.5);
+    TEST_ASSERT_TRUE(r.final_abs_e < 0.05);
+    TEST_ASSERT_TRUE(r.min_x > -3.5 && r.max_x < 0.5);
 }
 
-static void test_pid_hold_adc(void **state)
+static void test_pid_hold_adc(void)
 {
-    (void)state;
     const result_t r = run(0, PMA_CTRL_MODE_PID, PMA_REF_KIND_HOLD, -2.0f, 6, 2.0f, xr_hold);
-    assert_true(r.final_abs_e < 0.05);
-    assert_true(r.min_x > -3.0 && r.max_x < 0.0);
+    TEST_ASSERT_TRUE(r.final_abs_e < 0.05);
+    TEST_ASSERT_TRUE(r.min_x > -3.0 && r.max_x < 0.0);
 }
 
 /* The board glue, ADC and DAC: PID holding -2 cm; the LED blinks in IDLE
  * and ARMED and is steady on while RUNNING. */
-static void test_board_glue_pid_hold_adc(void **state)
+static void test_board_glue_pid_hold_adc(void)
 {
-    (void)state;
     use_board = 1;
     const result_t r = run(0, PMA_CTRL_MODE_PID, PMA_REF_KIND_HOLD, -2.0f, 6, 2.0f, xr_hold);
     use_board = 0;
-    assert_true(r.final_abs_e < 0.05);
-    assert_true(r.min_x > -3.0 && r.max_x < 0.0);
-    assert_true(pma_fake_dac_write_count() > 6000u); /* the DAC, every tick */
-    assert_int_equal(led_level, 1);                  /* RUNNING */
+    TEST_ASSERT_TRUE(r.final_abs_e < 0.05);
+    TEST_ASSERT_TRUE(r.min_x > -3.0 && r.max_x < 0.0);
+    TEST_ASSERT_GREATER_THAN(6000u, pma_fake_dac_write_count()); /* the DAC, every tick */
+    TEST_ASSERT_EQUAL_INT(1, led_level);                         /* RUNNING */
     /* IDLE and ARMED before it blinked: the level changed several times */
-    assert_true(board.led_changes >= 4u);
+    TEST_ASSERT_GREATER_OR_EQUAL(4u, board.led_changes);
 }
 
 /* The board glue over the plant bridge, switched on by sys.plant_bridge while
  * disarmed (true HIL): PPC on CASE1; the bridge cannot be switched off while
  * running and the DAC is not written while bridged. */
-static void test_board_glue_ppc_case1_bridge_parameter(void **state)
+static void test_board_glue_ppc_case1_bridge_parameter(void)
 {
-    (void)state;
     use_board = 1;
     const result_t r = run(1, PMA_CTRL_MODE_PPC, PMA_REF_KIND_CASE1, -1.5f, 4, 2.0f, xr_case1);
-    assert_true(r.max_e_after_tu < 0.2);
-    assert_true(r.min_x > -3.0 && r.max_x < 0.0);
+    TEST_ASSERT_TRUE(r.max_e_after_tu < 0.2);
+    TEST_ASSERT_TRUE(r.min_x > -3.0 && r.max_x < 0.0);
     const uint32_t dac_writes = pma_fake_dac_write_count();
     assert_status(set_param(PMA_PARAM_SYS_PLANT_BRIDGE, vu(0)), PMA_ERR_STATE);
     for (int i = 0; i < 100; ++i) tick_with_plant(); /* still bridged, still tracking */
     assert_state(app.state, PMA_STATE_RUNNING);
-    assert_int_equal(pma_fake_dac_write_count(), dac_writes);
+    TEST_ASSERT_EQUAL_INT(dac_writes, pma_fake_dac_write_count());
     use_board = 0;
 }
 
 int main(void)
 {
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_ppc_case1_bridge),
-        cmocka_unit_test(test_ppc_hold_adc),
-        cmocka_unit_test(test_mfac_hold_adc),
-        cmocka_unit_test(test_pid_hold_adc),
-        cmocka_unit_test(test_board_glue_pid_hold_adc),
-        cmocka_unit_test(test_board_glue_ppc_case1_bridge_parameter),
-    };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    UNITY_BEGIN();
+    RUN_TEST(test_ppc_case1_bridge);
+    RUN_TEST(test_ppc_hold_adc);
+    RUN_TEST(test_mfac_hold_adc);
+    RUN_TEST(test_pid_hold_adc);
+    RUN_TEST(test_board_glue_pid_hold_adc);
+    RUN_TEST(test_board_glue_ppc_case1_bridge_parameter);
+    return UNITY_END();
 }

@@ -75,21 +75,20 @@ static void run_table(uint8_t bridge)
             cap_clear();
             pma_app_handle_frame(&app, &f);
             drain();
-            assert_int_equal(cap.total, 1);
-            assert_int_equal(sent(PMA_PROTO_COMMAND_ACK_FRAME_ID), 1);
+            TEST_ASSERT_EQUAL_INT(1, cap.total);
+            TEST_ASSERT_EQUAL_INT(1, sent(PMA_PROTO_COMMAND_ACK_FRAME_ID));
             struct pma_proto_command_ack_t a;
             const pma_can_frame_t *r = last_frame(PMA_PROTO_COMMAND_ACK_FRAME_ID);
-            assert_int_equal(pma_proto_command_ack_unpack(&a, r->data, r->dlc), 0);
+            TEST_ASSERT_EQUAL_INT(0, pma_proto_command_ack_unpack(&a, r->data, r->dlc));
             if (a.result != e->result[s] || a.state != e->after[s]) {
-                print_error("%s: command %u arg %u in %s: result %s state %s, expected %s %s\n",
-                            bridge ? "bridge" : "adc", e->cmd, e->arg,
-                            pma_app_state_name(state_of[s]), pma_status_name(a.result),
-                            pma_app_state_name(a.state), pma_status_name(e->result[s]),
-                            pma_app_state_name(e->after[s]));
-                fail();
+                pma_test_fail("%s: command %u arg %u in %s: result %s state %s, expected %s %s",
+                              bridge ? "bridge" : "adc", e->cmd, e->arg,
+                              pma_app_state_name(state_of[s]), pma_status_name(a.result),
+                              pma_app_state_name(a.state), pma_status_name(e->result[s]),
+                              pma_app_state_name(e->after[s]));
             }
-            assert_int_equal(a.command, e->cmd);
-            assert_int_equal(a.arg, e->arg);
+            TEST_ASSERT_EQUAL_INT(e->cmd, a.command);
+            TEST_ASSERT_EQUAL_INT(e->arg, a.arg);
             assert_state(app.state, e->after[s]);
             /* fault codes: ESTOP from a non-fault state latches ESTOP; in FAULT the
              * first code stays; CLEAR_FAULTS clears it */
@@ -102,16 +101,16 @@ static void run_table(uint8_t bridge)
             }
             /* SELECT_* changes the parameter exactly when accepted */
             if (e->cmd == PMA_CMD_SELECT_CONTROLLER) {
-                assert_int_equal(app.params.ctrl_mode,
-                                 e->result[s] == PMA_OK ? e->arg : mode_before);
+                TEST_ASSERT_EQUAL_INT(e->result[s] == PMA_OK ? e->arg : mode_before,
+                                      app.params.ctrl_mode);
             } else {
-                assert_int_equal(app.params.ctrl_mode, mode_before);
+                TEST_ASSERT_EQUAL_INT(mode_before, app.params.ctrl_mode);
             }
             if (e->cmd == PMA_CMD_SELECT_REFERENCE) {
-                assert_int_equal(app.params.ref_kind,
-                                 e->result[s] == PMA_OK ? e->arg : ref_before);
+                TEST_ASSERT_EQUAL_INT(e->result[s] == PMA_OK ? e->arg : ref_before,
+                                      app.params.ref_kind);
             } else {
-                assert_int_equal(app.params.ref_kind, ref_before);
+                TEST_ASSERT_EQUAL_INT(ref_before, app.params.ref_kind);
             }
             /* a tick later the state holds (nothing faults on its own) */
             if (bridge) send_sample((uint8_t)(app.bridge_seq + 1u), counts_at(-1.5f));
@@ -121,26 +120,23 @@ static void run_table(uint8_t bridge)
             ++cases;
         }
     }
-    assert_int_equal(cases, S_COUNT * (sizeof table / sizeof table[0]));
+    TEST_ASSERT_EQUAL_INT(S_COUNT * (sizeof table / sizeof table[0]), cases);
 }
 
-static void test_every_command_in_every_state_adc(void **state)
+static void test_every_command_in_every_state_adc(void)
 {
-    (void)state;
     run_table(0);
 }
 
-static void test_every_command_in_every_state_bridge(void **state)
+static void test_every_command_in_every_state_bridge(void)
 {
-    (void)state;
     run_table(1);
 }
 
 /* BOOT exists only before pma_app_init() has finished: commands act on the
  * struct as pma_app_init() leaves it before loading (state BOOT). */
-static void test_commands_in_boot(void **state)
+static void test_commands_in_boot(void)
 {
-    (void)state;
     start_with(0, -1.5f);
     static const struct { uint8_t cmd; int rc; uint8_t after; } boot[] = {
         {PMA_CMD_ARM, PMA_ERR_STATE, PMA_STATE_BOOT},
@@ -163,16 +159,15 @@ static void test_commands_in_boot(void **state)
     app.state = PMA_STATE_BOOT;
     const uint32_t writes = pma_fake_dac_write_count();
     pma_app_tick(&app, 0);
-    assert_int_equal(pma_fake_dac_write_count(), writes);
+    TEST_ASSERT_EQUAL_INT(writes, pma_fake_dac_write_count());
     assert_state(app.state, PMA_STATE_BOOT);
 }
 
 /* ESTOP (this node) and ESTOP_ALL (broadcast), of any length, from every
  * state: FAULT with code ESTOP and the safe output in the same step; no
  * reply. From FAULT the first code stays latched. */
-static void test_estop_frames_from_every_state(void **state)
+static void test_estop_frames_from_every_state(void)
 {
-    (void)state;
     const uint16_t ids[2] = {PMA_PROTO_ESTOP_FRAME_ID | T_NODE, PMA_PROTO_ESTOP_ALL_FRAME_ID};
     const uint8_t dlcs[3] = {0, 1, 8};
     uint32_t cases = 0;
@@ -196,25 +191,24 @@ static void test_estop_frames_from_every_state(void **state)
                                                          : PMA_FAULT_ESTOP);
                     if (bridge) {
                         const struct pma_proto_plant_actuator_t m = last_actuator();
-                        assert_int_equal(m.dac_counts, 0);
-                        assert_int_equal(m.output_active, 0);
-                        assert_int_equal(cap.total, 1); /* the actuator frame, no reply */
+                        TEST_ASSERT_EQUAL_INT(0, m.dac_counts);
+                        TEST_ASSERT_EQUAL_INT(0, m.output_active);
+                        TEST_ASSERT_EQUAL_INT(1, cap.total); /* the actuator frame, no reply */
                     } else {
-                        assert_int_equal(dac_now(), 0);
-                        assert_int_equal(cap.total, 0);
+                        TEST_ASSERT_EQUAL_INT(0, dac_now());
+                        TEST_ASSERT_EQUAL_INT(0, cap.total);
                     }
                     ++cases;
                 }
             }
         }
     }
-    assert_int_equal(cases, 2u * S_COUNT * 2u * 3u);
+    TEST_ASSERT_EQUAL_INT(2u * S_COUNT * 2u * 3u, cases);
 }
 
 /* ESTOP for another node: not received (filters), and ignored if it were. */
-static void test_other_nodes_frames_ignored(void **state)
+static void test_other_nodes_frames_ignored(void)
 {
-    (void)state;
     to_armed(0);
     const pma_app_counters_t before = app.counters;
     const uint32_t params_before = params_crc(&app.params);
@@ -225,16 +219,16 @@ static void test_other_nodes_frames_ignored(void **state)
     for (size_t i = 0; i < sizeof bases / sizeof bases[0]; ++i) {
         pma_can_frame_t f = frame_of(bases[i], T_OTHER_NODE, dlcs[i],
                                      (const uint8_t[8]){PMA_CMD_ESTOP, 0, 0, 0, 0, 0, 0, 0});
-        assert_int_equal(pma_fake_can_inject(&f), PMA_FAKE_CAN_FILTERED);
+        TEST_ASSERT_EQUAL_INT(PMA_FAKE_CAN_FILTERED, pma_fake_can_inject(&f));
         /* even handed over directly: ignored, no reply */
         cap_clear();
         pma_app_handle_frame(&app, &f);
         drain();
-        assert_int_equal(cap.total, 0);
+        TEST_ASSERT_EQUAL_INT(0, cap.total);
     }
-    assert_int_equal(app.counters.frames_ignored, before.frames_ignored + 6u);
+    TEST_ASSERT_EQUAL_INT(before.frames_ignored + 6u, app.counters.frames_ignored);
     assert_state(app.state, PMA_STATE_ARMED);
-    assert_int_equal(params_crc(&app.params), params_before);
+    TEST_ASSERT_EQUAL_INT(params_before, params_crc(&app.params));
     /* the node's own outputs and undefined base ids addressed to it: ignored */
     const uint16_t own[] = {PMA_PROTO_HEARTBEAT_FRAME_ID, PMA_PROTO_COMMAND_ACK_FRAME_ID,
                             PMA_PROTO_TELEM_E_FRAME_ID, 0x100, 0x7F0};
@@ -244,9 +238,10 @@ static void test_other_nodes_frames_ignored(void **state)
     }
     cap_clear();
     step();
-    assert_int_equal(sent(PMA_PROTO_COMMAND_ACK_FRAME_ID) + sent(PMA_PROTO_PARAM_RESP_FRAME_ID), 0);
+    TEST_ASSERT_EQUAL_INT(0, sent(PMA_PROTO_COMMAND_ACK_FRAME_ID) +
+                                 sent(PMA_PROTO_PARAM_RESP_FRAME_ID));
     assert_state(app.state, PMA_STATE_ARMED);
-    assert_int_equal(app.counters.frames_ignored, before.frames_ignored + 11u);
+    TEST_ASSERT_EQUAL_INT(before.frames_ignored + 11u, app.counters.frames_ignored);
     /* invalid frames handed over directly (the HAL never delivers them) */
     pma_can_frame_t bad = frame_of(0x800u, 0, 0, NULL);
     pma_app_handle_frame(&app, &bad);
@@ -254,49 +249,47 @@ static void test_other_nodes_frames_ignored(void **state)
     pma_app_handle_frame(&app, &bad);
     pma_app_handle_frame(&app, NULL);
     pma_app_handle_frame(NULL, &bad);
-    assert_int_equal(app.counters.frames_bad, before.frames_bad + 2u);
+    TEST_ASSERT_EQUAL_INT(before.frames_bad + 2u, app.counters.frames_bad);
     assert_state(app.state, PMA_STATE_ARMED);
     /* but an ESTOP is obeyed whatever its length, even an invalid one */
     bad = frame_of(PMA_PROTO_ESTOP_FRAME_ID, T_NODE, 9, NULL);
     pma_app_handle_frame(&app, &bad);
     assert_state(app.state, PMA_STATE_FAULT);
-    assert_int_equal(app.fault, PMA_FAULT_ESTOP);
+    TEST_ASSERT_EQUAL_INT(PMA_FAULT_ESTOP, app.fault);
 }
 
 /* COMMAND with the wrong length: PMA_ERR_LENGTH, nothing changes. */
-static void test_command_wrong_length(void **state)
+static void test_command_wrong_length(void)
 {
-    (void)state;
     to_idle(0);
     const uint8_t dlcs[] = {0, 1, 3, 8};
     for (size_t i = 0; i < sizeof dlcs / sizeof dlcs[0]; ++i) {
         inject(PMA_PROTO_COMMAND_FRAME_ID, dlcs[i], (const uint8_t[8]){PMA_CMD_ARM, 0, 0});
         cap_clear();
         step();
-        assert_int_equal(sent(PMA_PROTO_COMMAND_ACK_FRAME_ID), 1);
+        TEST_ASSERT_EQUAL_INT(1, sent(PMA_PROTO_COMMAND_ACK_FRAME_ID));
         struct pma_proto_command_ack_t a;
         const pma_can_frame_t *r = last_frame(PMA_PROTO_COMMAND_ACK_FRAME_ID);
-        assert_int_equal(pma_proto_command_ack_unpack(&a, r->data, r->dlc), 0);
+        TEST_ASSERT_EQUAL_INT(0, pma_proto_command_ack_unpack(&a, r->data, r->dlc));
         assert_status(a.result, PMA_ERR_LENGTH);
-        assert_int_equal(a.command, dlcs[i] > 0 ? PMA_CMD_ARM : 0);
-        assert_int_equal(a.state, PMA_STATE_IDLE);
+        TEST_ASSERT_EQUAL_INT(dlcs[i] > 0 ? PMA_CMD_ARM : 0, a.command);
+        TEST_ASSERT_EQUAL_INT(PMA_STATE_IDLE, a.state);
         assert_state(app.state, PMA_STATE_IDLE);
     }
-    assert_int_equal(app.counters.frames_bad, 4u);
+    TEST_ASSERT_EQUAL_INT(4u, app.counters.frames_bad);
     /* the same command with the right length is obeyed */
     command_ok(PMA_CMD_ARM, 0, PMA_OK);
     assert_state(app.state, PMA_STATE_ARMED);
 }
 
 /* ARM needs a valid position: none before the first tick. */
-static void test_arm_refused_without_sample(void **state)
+static void test_arm_refused_without_sample(void)
 {
-    (void)state;
     /* ADC mode: the first step handles the frame before its tick reads the ADC */
     start_with(0, -1.5f);
     const struct pma_proto_command_ack_t a = command(PMA_CMD_ARM, 0);
     assert_status(a.result, PMA_ERR_NOT_READY);
-    assert_int_equal(a.state, PMA_STATE_IDLE);
+    TEST_ASSERT_EQUAL_INT(PMA_STATE_IDLE, a.state);
     command_ok(PMA_CMD_ARM, 0, PMA_OK); /* the tick has read it now */
 
     /* plant bridge: no PLANT_SENSOR yet */
@@ -305,8 +298,8 @@ static void test_arm_refused_without_sample(void **state)
     command_ok(PMA_CMD_ARM, 0, PMA_ERR_NOT_READY);
     assert_state(app.state, PMA_STATE_IDLE);
     const struct pma_proto_plant_actuator_t m = last_actuator();
-    assert_int_equal(m.sample, PMA_SAMPLE_NONE);
-    assert_int_equal(m.output_active, 0);
+    TEST_ASSERT_EQUAL_INT(PMA_SAMPLE_NONE, m.sample);
+    TEST_ASSERT_EQUAL_INT(0, m.output_active);
     send_sample(0, counts_at(-1.5f));
     step();
     command_ok(PMA_CMD_ARM, 0, PMA_OK);
@@ -314,9 +307,8 @@ static void test_arm_refused_without_sample(void **state)
 }
 
 /* ARM refused with the sensor's error while it reads a fault. */
-static void test_arm_refused_with_sensor_fault(void **state)
+static void test_arm_refused_with_sensor_fault(void)
 {
-    (void)state;
     to_idle(0);
     pma_fake_adc_wire_break();
     step();
@@ -331,16 +323,15 @@ static void test_arm_refused_with_sensor_fault(void **state)
     step();
     command_ok(PMA_CMD_ARM, 0, PMA_ERR_IO);
     assert_state(app.state, PMA_STATE_IDLE);
-    assert_int_equal(dac_now(), 0);
+    TEST_ASSERT_EQUAL_INT(0, dac_now());
     pma_fake_adc_clear_fault();
     step();
     command_ok(PMA_CMD_ARM, 0, PMA_OK);
 }
 
 /* ARM refused out of position: beyond the constraints by more than the margin. */
-static void test_arm_refused_out_of_position(void **state)
+static void test_arm_refused_out_of_position(void)
 {
-    (void)state;
     static const struct { float x; int rc; } cases[] = {
         {0.6f, PMA_ERR_RANGE}, {-3.6f, PMA_ERR_RANGE}, {3.0f, PMA_ERR_RANGE},
         {0.4f, PMA_OK}, {-3.4f, PMA_OK}, {-0.01f, PMA_OK},
@@ -351,9 +342,8 @@ static void test_arm_refused_out_of_position(void **state)
         step();
         const struct pma_proto_command_ack_t a = command(PMA_CMD_ARM, 0);
         if (a.result != cases[i].rc) {
-            print_error("ARM at x = %.2f cm: %s, expected %s\n", (double)cases[i].x,
-                        pma_status_name(a.result), pma_status_name(cases[i].rc));
-            fail();
+            pma_test_fail("ARM at x = %.2f cm: %s, expected %s", (double)cases[i].x,
+                          pma_status_name(a.result), pma_status_name(cases[i].rc));
         }
         assert_state(app.state, cases[i].rc == PMA_OK ? PMA_STATE_ARMED : PMA_STATE_IDLE);
     }
@@ -361,9 +351,8 @@ static void test_arm_refused_out_of_position(void **state)
 
 /* ARM refused when a cross-parameter rule fails (each rule on its own),
  * nothing activated; fixed again, ARM works. */
-static void test_arm_refused_cross_params(void **state)
+static void test_arm_refused_cross_params(void)
 {
-    (void)state;
     static const struct {
         uint16_t id;
         uint8_t type;
@@ -385,12 +374,11 @@ static void test_arm_refused_cross_params(void **state)
         assert_status(r.result, PMA_OK);
         const struct pma_proto_command_ack_t a = command(PMA_CMD_ARM, 0);
         if (a.result != PMA_ERR_RANGE) {
-            print_error("case %lu (param %u): ARM gave %s, expected PMA_ERR_RANGE\n",
-                        (unsigned long)i, cases[i].id, pma_status_name(a.result));
-            fail();
+            pma_test_fail("case %lu (param %u): ARM gave %s, expected PMA_ERR_RANGE",
+                          (unsigned long)i, cases[i].id, pma_status_name(a.result));
         }
-        assert_int_equal(a.state, PMA_STATE_IDLE);
-        assert_int_equal(dac_now(), 0); /* still vented */
+        TEST_ASSERT_EQUAL_INT(PMA_STATE_IDLE, a.state);
+        TEST_ASSERT_EQUAL_INT(0, dac_now()); /* still vented */
     }
     /* the scalings (adc.*, dac.*) are kept valid at every SET instead: refused
      * there with PMA_ERR_RANGE, nothing changes, ARM still works */
@@ -413,7 +401,7 @@ static void test_arm_refused_cross_params(void **state)
         const presp_t r = param_req(PMA_PARAM_OP_SET, at_set[i].type, at_set[i].id, at_set[i].bad);
         assert_status(r.result, PMA_ERR_RANGE);
         assert_status(pma_param_get(&app.params, at_set[i].id, &t, &now), PMA_OK);
-        assert_int_equal(now.u32, was.u32);
+        TEST_ASSERT_EQUAL_INT(was.u32, now.u32);
         command_ok(PMA_CMD_ARM, 0, PMA_OK);
     }
     /* FIXED safe pressure above p_max */
@@ -427,16 +415,15 @@ static void test_arm_refused_cross_params(void **state)
 
 /* START refused when the reference breaks the band check (eq. 14 with w1 for
  * PPC): PMA_ERR_BAND and the node stays ARMED, output at the preset. */
-static void test_start_refused_band_check(void **state)
+static void test_start_refused_band_check(void)
 {
-    (void)state;
     to_armed(0);
     /* HOLD at -0.1 cm: inside -3 < x < 0, but not by w1 = 0.2 */
     set_f32(PMA_PARAM_REF_OFFSET_CM, -0.1f);
     command_ok(PMA_CMD_START, 0, PMA_ERR_BAND);
     assert_state(app.state, PMA_STATE_ARMED);
     step();
-    assert_int_equal(dac_now(), T_P0_COUNTS);
+    TEST_ASSERT_EQUAL_INT(T_P0_COUNTS, dac_now());
     /* at -2.85: too close to the lower edge */
     set_f32(PMA_PARAM_REF_OFFSET_CM, -2.85f);
     command_ok(PMA_CMD_START, 0, PMA_ERR_BAND);
@@ -470,9 +457,8 @@ static void test_start_refused_band_check(void **state)
 }
 
 /* START refused by other parameter problems, state stays ARMED. */
-static void test_start_refused_bad_params(void **state)
+static void test_start_refused_bad_params(void)
 {
-    (void)state;
     to_armed(0);
     /* ctrl.u_min is a "stopped" parameter: settable while ARMED */
     set_f32(PMA_PARAM_CTRL_U_MIN, 400.0f);
@@ -481,78 +467,74 @@ static void test_start_refused_bad_params(void **state)
     set_f32(PMA_PARAM_CTRL_U_MIN, -400.0f);
     /* velocity estimator bandwidth above half the tick rate */
     set_f32(PMA_PARAM_VEL_FC_HZ, 600.0f);
-    assert_true(command(PMA_CMD_START, 0).result < 0);
+    TEST_ASSERT_LESS_THAN(0, command(PMA_CMD_START, 0).result);
     assert_state(app.state, PMA_STATE_ARMED);
     set_f32(PMA_PARAM_VEL_FC_HZ, 30.0f);
     command_ok(PMA_CMD_START, 0, PMA_OK);
 }
 
 /* STOP from RUNNING returns to the preset pressure, DISARM to the safe one. */
-static void test_stop_and_disarm_outputs(void **state)
+static void test_stop_and_disarm_outputs(void)
 {
-    (void)state;
     to_running(0);
     assert_status(set_param(PMA_PARAM_CTRL_MODE, vu(0)), PMA_ERR_STATE); /* not while RUNNING */
     command_ok(PMA_CMD_STOP, 0, PMA_OK);
     steps(20);
     assert_state(app.state, PMA_STATE_ARMED);
-    assert_int_equal(dac_now(), T_P0_COUNTS);
+    TEST_ASSERT_EQUAL_INT(T_P0_COUNTS, dac_now());
     command_ok(PMA_CMD_DISARM, 0, PMA_OK);
     assert_state(app.state, PMA_STATE_IDLE);
-    assert_int_equal(dac_now(), 0); /* vented at once, in the step of the command */
+    TEST_ASSERT_EQUAL_INT(0, dac_now()); /* vented at once, in the step of the command */
     /* DISARM straight from RUNNING */
     to_running(0);
     command_ok(PMA_CMD_DISARM, 0, PMA_OK);
     assert_state(app.state, PMA_STATE_IDLE);
-    assert_int_equal(dac_now(), 0);
+    TEST_ASSERT_EQUAL_INT(0, dac_now());
 }
 
 /* pma_app_init on a HAL that is not up: the error, state FAULT, no loop. */
-static void test_init_errors(void **state)
+static void test_init_errors(void)
 {
-    (void)state;
     pma_fake_reset(); /* pma_hal_init() not called */
     plat = platform(0);
     assert_status(pma_app_init(NULL, &plat), PMA_ERR_NULL);
     assert_status(pma_app_init(&app, NULL), PMA_ERR_NULL);
     assert_status(pma_app_init(&app, &plat), PMA_ERR_NOT_READY);
     assert_state(app.state, PMA_STATE_FAULT);
-    assert_true(app.fault != PMA_FAULT_NONE);
+    TEST_ASSERT_TRUE(app.fault != PMA_FAULT_NONE);
     assert_status(pma_app_step(&app), PMA_ERR_NOT_READY);
     assert_status(pma_app_step(NULL), PMA_ERR_NULL);
     assert_state(app.state, PMA_STATE_FAULT);
-    assert_int_equal(pma_fake_dac_write_count(), 0);
+    TEST_ASSERT_EQUAL_INT(0, pma_fake_dac_write_count());
 }
 
-static void test_state_names(void **state)
+static void test_state_names(void)
 {
-    (void)state;
-    assert_string_equal(pma_app_state_name(PMA_STATE_BOOT), "BOOT");
-    assert_string_equal(pma_app_state_name(PMA_STATE_RUNNING), "RUNNING");
-    assert_string_equal(pma_app_state_name(PMA_STATE_FAULT), "FAULT");
-    assert_string_equal(pma_app_state_name(5), "UNKNOWN");
-    assert_string_equal(pma_app_state_name(-1), "UNKNOWN");
-    print_message("sizeof(pma_app_t) = %lu bytes\n", (unsigned long)sizeof(pma_app_t));
+    TEST_ASSERT_EQUAL_STRING("BOOT", pma_app_state_name(PMA_STATE_BOOT));
+    TEST_ASSERT_EQUAL_STRING("RUNNING", pma_app_state_name(PMA_STATE_RUNNING));
+    TEST_ASSERT_EQUAL_STRING("FAULT", pma_app_state_name(PMA_STATE_FAULT));
+    TEST_ASSERT_EQUAL_STRING("UNKNOWN", pma_app_state_name(5));
+    TEST_ASSERT_EQUAL_STRING("UNKNOWN", pma_app_state_name(-1));
+    printf("sizeof(pma_app_t) = %lu bytes\n", (unsigned long)sizeof(pma_app_t));
 }
 
 int main(void)
 {
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_every_command_in_every_state_adc),
-        cmocka_unit_test(test_every_command_in_every_state_bridge),
-        cmocka_unit_test(test_commands_in_boot),
-        cmocka_unit_test(test_estop_frames_from_every_state),
-        cmocka_unit_test(test_other_nodes_frames_ignored),
-        cmocka_unit_test(test_command_wrong_length),
-        cmocka_unit_test(test_arm_refused_without_sample),
-        cmocka_unit_test(test_arm_refused_with_sensor_fault),
-        cmocka_unit_test(test_arm_refused_out_of_position),
-        cmocka_unit_test(test_arm_refused_cross_params),
-        cmocka_unit_test(test_start_refused_band_check),
-        cmocka_unit_test(test_start_refused_bad_params),
-        cmocka_unit_test(test_stop_and_disarm_outputs),
-        cmocka_unit_test(test_init_errors),
-        cmocka_unit_test(test_state_names),
-    };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    UNITY_BEGIN();
+    RUN_TEST(test_every_command_in_every_state_adc);
+    RUN_TEST(test_every_command_in_every_state_bridge);
+    RUN_TEST(test_commands_in_boot);
+    RUN_TEST(test_estop_frames_from_every_state);
+    RUN_TEST(test_other_nodes_frames_ignored);
+    RUN_TEST(test_command_wrong_length);
+    RUN_TEST(test_arm_refused_without_sample);
+    RUN_TEST(test_arm_refused_with_sensor_fault);
+    RUN_TEST(test_arm_refused_out_of_position);
+    RUN_TEST(test_arm_refused_cross_params);
+    RUN_TEST(test_start_refused_band_check);
+    RUN_TEST(test_start_refused_bad_params);
+    RUN_TEST(test_stop_and_disarm_outputs);
+    RUN_TEST(test_init_errors);
+    RUN_TEST(test_state_names);
+    return UNITY_END();
 }

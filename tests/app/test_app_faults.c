@@ -28,7 +28,7 @@ static uint16_t safe_counts(uint16_t active_counts)
 static uint16_t output_now(void)
 {
     if (plat.plant_bridge) {
-        assert_int_equal(sent(PMA_PROTO_PLANT_ACTUATOR_FRAME_ID), 1);
+        TEST_ASSERT_EQUAL_INT(1, sent(PMA_PROTO_PLANT_ACTUATOR_FRAME_ID));
         return last_actuator().dac_counts;
     }
     return dac_now();
@@ -39,14 +39,14 @@ static uint16_t output_now(void)
  * safe counts. */
 static void expect_fault_this_step(pma_fault_t want)
 {
-    assert_true(app.state == PMA_STATE_ARMED || app.state == PMA_STATE_RUNNING);
+    TEST_ASSERT_TRUE(app.state == PMA_STATE_ARMED || app.state == PMA_STATE_RUNNING);
     const uint16_t active = app.dac_counts;
     cap_clear();
     step();
     assert_state(app.state, PMA_STATE_FAULT);
     assert_fault(app.fault, want);
-    assert_int_equal(output_now(), safe_counts(active));
-    if (plat.plant_bridge) assert_int_equal(last_actuator().output_active, 0);
+    TEST_ASSERT_EQUAL_INT(safe_counts(active), output_now());
+    if (plat.plant_bridge) TEST_ASSERT_EQUAL_INT(0, last_actuator().output_active);
 }
 
 /* The fault stays latched (even when its cause is gone, even when others
@@ -63,27 +63,26 @@ static void expect_latched_then_clear(pma_fault_t want, uint8_t bridge)
         step();
         assert_state(app.state, PMA_STATE_FAULT);
         assert_fault(app.fault, want);
-        assert_int_equal(output_now(), out);
+        TEST_ASSERT_EQUAL_INT(out, output_now());
     }
     struct pma_proto_heartbeat_t h = next_heartbeat();
-    assert_int_equal(h.state, PMA_STATE_FAULT);
-    assert_int_equal(h.fault_code, want);
-    assert_false(h.flags & PMA_HB_OUTPUT_ACTIVE);
+    TEST_ASSERT_EQUAL_INT(PMA_STATE_FAULT, h.state);
+    TEST_ASSERT_EQUAL_INT(want, h.fault_code);
+    TEST_ASSERT_FALSE(h.flags & PMA_HB_OUTPUT_ACTIVE);
     if (bridge) send_sample(seq++, counts_at(-1.5f));
     const struct pma_proto_command_ack_t a = command(PMA_CMD_CLEAR_FAULTS, 0);
     assert_status(a.result, PMA_OK);
-    assert_int_equal(a.state, PMA_STATE_IDLE);
+    TEST_ASSERT_EQUAL_INT(PMA_STATE_IDLE, a.state);
     assert_fault(app.fault, PMA_FAULT_NONE);
     h = next_heartbeat();
-    assert_int_equal(h.state, PMA_STATE_IDLE);
-    assert_int_equal(h.fault_code, 0);
+    TEST_ASSERT_EQUAL_INT(PMA_STATE_IDLE, h.state);
+    TEST_ASSERT_EQUAL_INT(0, h.fault_code);
 }
 
 /* ----------------------------------------------------------- the sensor -- */
 
-static void test_sensor_faults_adc(void **state)
+static void test_sensor_faults_adc(void)
 {
-    (void)state;
     static const struct { int kind; pma_fault_t fault; } cases[] = {
         {0, PMA_FAULT_SENSOR_WIRE_BREAK}, {1, PMA_FAULT_SENSOR_RANGE},
         {2, PMA_FAULT_SENSOR_RANGE}, {3, PMA_FAULT_SENSOR_READ},
@@ -95,7 +94,7 @@ static void test_sensor_faults_adc(void **state)
             } else {
                 to_armed(0);
             }
-            assert_int_equal(app.dac_counts, T_P0_COUNTS);
+            TEST_ASSERT_EQUAL_INT(T_P0_COUNTS, app.dac_counts);
             switch (cases[i].kind) {
             case 0: pma_fake_adc_wire_break(); break;
             case 1: pma_fake_adc_out_of_range(4095); break;  /* the clipped ADC */
@@ -111,9 +110,8 @@ static void test_sensor_faults_adc(void **state)
 }
 
 /* Bridge: a sample at the wire-break level or out of range. */
-static void test_sensor_faults_bridge(void **state)
+static void test_sensor_faults_bridge(void)
 {
-    (void)state;
     to_running(1);
     send_sample(22, 100); /* below the wire-break level 737 */
     expect_fault_this_step(PMA_FAULT_SENSOR_WIRE_BREAK);
@@ -125,9 +123,8 @@ static void test_sensor_faults_bridge(void **state)
 
 /* Bridge: no new sample for safety.sensor_timeout_ticks ticks while the
  * output is active (repeated samples do not count as new). */
-static void test_sensor_timeout_bridge(void **state)
+static void test_sensor_timeout_bridge(void)
 {
-    (void)state;
     for (int running = 0; running < 2; ++running) {
         if (running) {
             to_running(1);
@@ -137,15 +134,15 @@ static void test_sensor_timeout_bridge(void **state)
         send_sample((uint8_t)(app.bridge_seq + 1u), counts_at(-1.5f));
         cap_clear();
         step();
-        assert_int_equal(last_actuator().sample, PMA_SAMPLE_NEW);
+        TEST_ASSERT_EQUAL_INT(PMA_SAMPLE_NEW, last_actuator().sample);
         /* 9 ticks without a new sample (one of them a duplicate): still fine */
         for (int i = 1; i < 10; ++i) {
             if (i == 5) send_sample(app.bridge_seq, counts_at(-1.5f));
             cap_clear();
             step();
             assert_state(app.state, running ? PMA_STATE_RUNNING : PMA_STATE_ARMED);
-            assert_int_equal(last_actuator().sample, PMA_SAMPLE_REPEATED);
-            assert_int_equal(last_actuator().dac_counts, T_P0_COUNTS);
+            TEST_ASSERT_EQUAL_INT(PMA_SAMPLE_REPEATED, last_actuator().sample);
+            TEST_ASSERT_EQUAL_INT(T_P0_COUNTS, last_actuator().dac_counts);
         }
         /* the 10th */
         expect_fault_this_step(PMA_FAULT_SENSOR_TIMEOUT);
@@ -172,9 +169,8 @@ static void test_sensor_timeout_bridge(void **state)
 
 /* ------------------------------------------------------------- position -- */
 
-static void test_position_limit(void **state)
+static void test_position_limit(void)
 {
-    (void)state;
     static const float bad[] = {0.55f, -3.55f, 2.0f};
     for (int bridge = 0; bridge < 2; ++bridge) {
         for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
@@ -209,20 +205,19 @@ static void test_position_limit(void **state)
 
 /* ---------------------------------------------------------- tick overrun -- */
 
-static void test_tick_overrun(void **state)
+static void test_tick_overrun(void)
 {
-    (void)state;
     /* from the fake clock: the loop was late by 2 periods (allowed), then 3 */
     to_running(0);
     pma_fake_time_advance_us(2u * T_PERIOD_US);
     cap_clear();
     step();
-    assert_int_equal(app.late_ticks, 2);
+    TEST_ASSERT_EQUAL_INT(2, app.late_ticks);
     assert_state(app.state, PMA_STATE_RUNNING);
     pma_fake_time_advance_us(3u * T_PERIOD_US);
-    assert_int_equal(app.state, PMA_STATE_RUNNING);
+    TEST_ASSERT_EQUAL_INT(PMA_STATE_RUNNING, app.state);
     expect_fault_this_step(PMA_FAULT_TICK_OVERRUN);
-    assert_int_equal(app.late_ticks, 3);
+    TEST_ASSERT_EQUAL_INT(3, app.late_ticks);
     expect_latched_then_clear(PMA_FAULT_TICK_OVERRUN, 0);
 
     /* given directly to pma_app_tick, in ARMED */
@@ -232,7 +227,7 @@ static void test_tick_overrun(void **state)
     pma_app_tick(&app, 3);
     assert_state(app.state, PMA_STATE_FAULT);
     assert_fault(app.fault, PMA_FAULT_TICK_OVERRUN);
-    assert_int_equal(dac_now(), 0);
+    TEST_ASSERT_EQUAL_INT(0, dac_now());
 
     /* safety.max_late_ticks 0: one late tick trips */
     to_idle(0);
@@ -250,9 +245,8 @@ static void test_tick_overrun(void **state)
 
 /* ----------------------------------------------------------- host heartbeat -- */
 
-static void test_host_heartbeat_lost(void **state)
+static void test_host_heartbeat_lost(void)
 {
-    (void)state;
     /* ARMED: no host heartbeat needed */
     to_armed(0);
     steps(2000);
@@ -302,16 +296,15 @@ static void test_host_heartbeat_lost(void **state)
  * produce one from finite inputs; this stands for a corrupted value: the
  * OPEN_LOOP controller passes ctrl.openloop_u through, and a NaN there must
  * fault NOT_FINITE with the safe output in that tick. */
-static void test_non_finite_output(void **state)
+static void test_non_finite_output(void)
 {
-    (void)state;
     to_armed(0);
     command_ok(PMA_CMD_SELECT_CONTROLLER, PMA_CTRL_MODE_OPEN_LOOP, PMA_OK);
     assert_status(set_param(PMA_PARAM_CTRL_OPENLOOP_U, vf(NAN)), PMA_ERR_NOT_FINITE);
     set_f32(PMA_PARAM_CTRL_OPENLOOP_U, 30.0f);
     command_ok(PMA_CMD_START, 0, PMA_OK);
     steps(10);
-    assert_int_equal(dac_now(), dac_counts_of(330.0f)); /* p0 + u */
+    TEST_ASSERT_EQUAL_INT(dac_counts_of(330.0f), dac_now()); /* p0 + u */
     app.params.ctrl_openloop_u = NAN; /* corruption, not through the protocol */
     expect_fault_this_step(PMA_FAULT_NOT_FINITE);
     app.params.ctrl_openloop_u = 0.0f;
@@ -327,9 +320,8 @@ static void test_non_finite_output(void **state)
 
 /* PPC: the position held far from the reference drives lambda1 into its
  * barrier; safety.barrier_ticks consecutive clamped ticks fault. */
-static void test_barrier(void **state)
+static void test_barrier(void)
 {
-    (void)state;
     to_running(0);
     pma_fake_adc_set(counts_at(-0.2f)); /* e = 1.3 cm >> w1 = 0.2 cm, inside the band */
     uint32_t run = 0, t = 0;
@@ -346,11 +338,11 @@ static void test_barrier(void **state)
             /* the 100th consecutive clamped tick */
             assert_state(app.state, PMA_STATE_FAULT);
             assert_fault(app.fault, PMA_FAULT_BARRIER);
-            assert_int_equal(dac_now(), safe_counts(active));
+            TEST_ASSERT_EQUAL_INT(safe_counts(active), dac_now());
         }
     }
-    assert_int_equal(run, 100u);
-    assert_true(app.ctrl.breaches >= 100u);
+    TEST_ASSERT_EQUAL_INT(100u, run);
+    TEST_ASSERT_GREATER_OR_EQUAL(100u, app.ctrl.breaches);
     expect_latched_then_clear(PMA_FAULT_BARRIER, 0);
 
     /* 0 disables the check */
@@ -369,16 +361,15 @@ static void test_barrier(void **state)
         if (run > longest) longest = run;
     }
     assert_state(app.state, PMA_STATE_RUNNING);
-    assert_true(longest > 500u); /* far beyond the 100 that trip when enabled */
+    TEST_ASSERT_GREATER_THAN(500u, longest); /* far beyond the 100 that trip when enabled */
 }
 
 /* ---------------------------------------------------------------- DAC -- */
 
 /* The DAC refuses the counts (beyond the fake's 12 bits while dac.max_counts
  * allows them): OUTPUT fault, and the safe value is written instead. */
-static void test_dac_failure(void **state)
+static void test_dac_failure(void)
 {
-    (void)state;
     /* dac.max_counts cannot exceed the 12-bit DAC (the table's range) */
     to_idle(0);
     assert_status(set_param(PMA_PARAM_DAC_MAX_COUNTS, vu(4096)), PMA_ERR_RANGE);
@@ -386,14 +377,14 @@ static void test_dac_failure(void **state)
      * works again the safe value (VENT: 0 counts) is what it gets */
     command_ok(PMA_CMD_ARM, 0, PMA_OK);
     steps(20);
-    assert_true(dac_now() > 0);
+    TEST_ASSERT_GREATER_THAN(0, dac_now());
     pma_fake_dac_fail(true);
     step();
     assert_state(app.state, PMA_STATE_FAULT);
     assert_fault(app.fault, PMA_FAULT_OUTPUT);
     pma_fake_dac_fail(false);
     step();
-    assert_int_equal(dac_now(), 0);
+    TEST_ASSERT_EQUAL_INT(0, dac_now());
     /* a failing DAC while IDLE is reported too (the safe value may not be out) */
     command_ok(PMA_CMD_CLEAR_FAULTS, 0, PMA_OK);
     pma_fake_dac_fail(true);
@@ -404,9 +395,8 @@ static void test_dac_failure(void **state)
 
 /* -------------------------------------------------------------- bus-off -- */
 
-static void test_bus_off(void **state)
+static void test_bus_off(void)
 {
-    (void)state;
     /* RUNNING, the bus breaks: the node's own sends push it bus-off */
     to_running(0);
     set_u32(PMA_PARAM_TELEM_DECIMATION, 1); /* 5 frames per tick */
@@ -420,14 +410,14 @@ static void test_bus_off(void **state)
         assert_state(app.state, PMA_STATE_RUNNING);
         step();
         ++t;
-        assert_true(t < 20);
+        TEST_ASSERT_LESS_THAN(20, t);
     }
     /* it went bus-off in the telemetry of the last tick: the fault is raised
      * in that step's housekeeping and the output goes safe in the next tick */
     assert_state(app.state, PMA_STATE_FAULT);
     assert_fault(app.fault, PMA_FAULT_CAN_BUS_OFF);
     step();
-    assert_int_equal(dac_now(), 0);
+    TEST_ASSERT_EQUAL_INT(0, dac_now());
     /* CLEAR_FAULTS refused while bus-off (no frame arrives now: called directly) */
     assert_status(pma_app_command(&app, PMA_CMD_CLEAR_FAULTS, 0), PMA_ERR_BUS_OFF);
     assert_state(app.state, PMA_STATE_FAULT);
@@ -436,7 +426,7 @@ static void test_bus_off(void **state)
     assert_status(pma_fake_can_inject(&f), PMA_ERR_BUS_OFF);
     const uint32_t failed = app.counters.tx_failed;
     pma_app_handle_frame(&app, &f); /* its ACK cannot be sent */
-    assert_int_equal(app.counters.tx_failed, failed + 1u);
+    TEST_ASSERT_EQUAL_INT(failed + 1u, app.counters.tx_failed);
     assert_state(app.state, PMA_STATE_FAULT);
     steps(10);
     assert_state(app.state, PMA_STATE_FAULT);
@@ -445,7 +435,7 @@ static void test_bus_off(void **state)
     pma_fake_can_set_recovery(0, false);
     step();
     assert_status(pma_hal_can_status(&cs), PMA_OK);
-    assert_int_equal(cs.state, PMA_CAN_ERROR_ACTIVE);
+    TEST_ASSERT_EQUAL_INT(PMA_CAN_ERROR_ACTIVE, cs.state);
     assert_fault(app.fault, PMA_FAULT_CAN_BUS_OFF);
     expect_latched_then_clear(PMA_FAULT_CAN_BUS_OFF, 0);
 
@@ -467,17 +457,16 @@ static void test_bus_off(void **state)
 
 /* In bridge mode the fault is visible in the PLANT_ACTUATOR frame of the
  * tick (once the bus is back: nothing is sent while bus-off). */
-static void test_bridge_fault_frame(void **state)
+static void test_bridge_fault_frame(void)
 {
-    (void)state;
     to_running(1);
     send_sample(22, counts_at(-1.5f));
     cap_clear();
     step();
     struct pma_proto_plant_actuator_t m = last_actuator();
-    assert_int_equal(m.output_active, 1);
-    assert_int_equal(m.seq, 22);
-    assert_true(m.dac_counts > 0);
+    TEST_ASSERT_EQUAL_INT(1, m.output_active);
+    TEST_ASSERT_EQUAL_INT(22, m.seq);
+    TEST_ASSERT_GREATER_THAN(0, m.dac_counts);
     /* ESTOP frame then a sample in the same step: the actuator frame of this
      * tick already carries the safe output and echoes the new seq */
     pma_can_frame_t f = frame_of(PMA_PROTO_ESTOP_FRAME_ID, T_NODE, 0, NULL);
@@ -486,19 +475,18 @@ static void test_bridge_fault_frame(void **state)
     cap_clear();
     step();
     m = last_actuator();
-    assert_int_equal(m.output_active, 0);
-    assert_int_equal(m.dac_counts, 0);
-    assert_int_equal(m.seq, 23);
-    assert_int_equal(m.sample, PMA_SAMPLE_NEW);
+    TEST_ASSERT_EQUAL_INT(0, m.output_active);
+    TEST_ASSERT_EQUAL_INT(0, m.dac_counts);
+    TEST_ASSERT_EQUAL_INT(23, m.seq);
+    TEST_ASSERT_EQUAL_INT(PMA_SAMPLE_NEW, m.sample);
     assert_fault(app.fault, PMA_FAULT_ESTOP);
 }
 
 /* Bridge: a PLANT_ACTUATOR frame that cannot be queued is counted, not a
  * fault (supervisor.h, PMA_FAULT_OUTPUT); the rig, getting no commands, is
  * the one that times out. */
-static void test_bridge_actuator_frame_failure_counted(void **state)
+static void test_bridge_actuator_frame_failure_counted(void)
 {
-    (void)state;
     to_running(1);
     pma_fake_can_block_tx(true); /* nothing leaves; the 4-frame queue fills */
     uint8_t s = 22;
@@ -506,56 +494,55 @@ static void test_bridge_actuator_frame_failure_counted(void **state)
         send_sample(s++, counts_at(-1.5f));
         step();
     }
-    assert_true(app.counters.tx_failed >= 16u);
+    TEST_ASSERT_GREATER_OR_EQUAL(16u, app.counters.tx_failed);
     assert_state(app.state, PMA_STATE_RUNNING);
     pma_fake_can_block_tx(false); /* the four queued frames go out */
     cap_clear();
     drain();
-    assert_int_equal(sent(PMA_PROTO_PLANT_ACTUATOR_FRAME_ID), 4);
+    TEST_ASSERT_EQUAL_INT(4, sent(PMA_PROTO_PLANT_ACTUATOR_FRAME_ID));
     send_sample(s, counts_at(-1.5f));
     cap_clear();
     step();
-    assert_int_equal(last_actuator().seq, s);
-    assert_int_equal(last_actuator().output_active, 1);
+    TEST_ASSERT_EQUAL_INT(s, last_actuator().seq);
+    TEST_ASSERT_EQUAL_INT(1, last_actuator().output_active);
 }
 
 /* ----------------------------------------------------------- watchdog -- */
 
-static void test_watchdog_reset(void **state)
+static void test_watchdog_reset(void)
 {
-    (void)state;
     to_running(0);
-    assert_true(pma_fake_watchdog_running());
+    TEST_ASSERT_TRUE(pma_fake_watchdog_running());
     /* the loop hangs: no step (no kick) for longer than the timeout */
     pma_fake_time_advance_us(T_WATCHDOG_MS * 1000u + 1u);
-    assert_true(pma_fake_watchdog_expired());
+    TEST_ASSERT_TRUE(pma_fake_watchdog_expired());
     pma_fake_reboot();
     assert_status(restart_app(), PMA_OK);
     /* the BOOT heartbeat tells the host why */
     struct pma_proto_heartbeat_t h = last_heartbeat();
-    assert_int_equal(h.state, PMA_STATE_BOOT);
-    assert_int_equal(h.reset_cause, PMA_RESET_WATCHDOG);
+    TEST_ASSERT_EQUAL_INT(PMA_STATE_BOOT, h.state);
+    TEST_ASSERT_EQUAL_INT(PMA_RESET_WATCHDOG, h.reset_cause);
     assert_state(app.state, PMA_STATE_FAULT);
     assert_fault(app.fault, PMA_FAULT_WATCHDOG_RESET);
     /* the first tick puts out the safe value */
     cap_clear();
     step();
-    assert_int_equal(dac_now(), 0);
-    assert_true(pma_fake_watchdog_running()); /* started again */
+    TEST_ASSERT_EQUAL_INT(0, dac_now());
+    TEST_ASSERT_TRUE(pma_fake_watchdog_running()); /* started again */
     command_ok(PMA_CMD_ARM, 0, PMA_ERR_FAULT);
     h = next_heartbeat();
-    assert_int_equal(h.fault_code, PMA_FAULT_WATCHDOG_RESET);
-    assert_int_equal(h.reset_cause, PMA_RESET_WATCHDOG);
+    TEST_ASSERT_EQUAL_INT(PMA_FAULT_WATCHDOG_RESET, h.fault_code);
+    TEST_ASSERT_EQUAL_INT(PMA_RESET_WATCHDOG, h.reset_cause);
     expect_latched_then_clear(PMA_FAULT_WATCHDOG_RESET, 0);
     command_ok(PMA_CMD_ARM, 0, PMA_OK);
 
     /* kicked in time (the loop keeps stepping): no reset */
     steps(1000);
-    assert_false(pma_fake_watchdog_expired());
+    TEST_ASSERT_FALSE(pma_fake_watchdog_expired());
     /* a software reset is no fault */
     pma_fake_reboot();
     assert_status(restart_app(), PMA_OK);
-    assert_int_equal(last_heartbeat().reset_cause, PMA_RESET_SOFTWARE);
+    TEST_ASSERT_EQUAL_INT(PMA_RESET_SOFTWARE, last_heartbeat().reset_cause);
     assert_state(app.state, PMA_STATE_IDLE);
 }
 
@@ -563,9 +550,8 @@ static void test_watchdog_reset(void **state)
 
 /* VENT, HOLD and FIXED, each with a sensor fault while RUNNING, with ESTOP,
  * and in IDLE after DISARM. */
-static void test_safe_modes(void **state)
+static void test_safe_modes(void)
 {
-    (void)state;
     static const struct { uint32_t mode; float kpa; } modes[] = {
         {PMA_SAFETY_SAFE_MODE_VENT, 0.0f},
         {PMA_SAFETY_SAFE_MODE_HOLD, 0.0f},
@@ -586,14 +572,14 @@ static void test_safe_modes(void **state)
             step();
             const uint16_t idle = modes[i].mode == PMA_SAFETY_SAFE_MODE_FIXED
                                       ? dac_counts_of(modes[i].kpa) : 0u;
-            assert_int_equal(output_now(), idle);
+            TEST_ASSERT_EQUAL_INT(idle, output_now());
             command_ok(PMA_CMD_ARM, 0, PMA_OK);
             command_ok(PMA_CMD_START, 0, PMA_OK);
             for (uint8_t s = 2; s < 60; ++s) {
                 if (bridge) send_sample(s, counts_at(-1.5f));
                 step();
             }
-            assert_int_equal(app.dac_counts, dac_counts_of(340.0f));
+            TEST_ASSERT_EQUAL_INT(dac_counts_of(340.0f), app.dac_counts);
             /* the fault */
             if (bridge) {
                 send_sample(60, 10);
@@ -605,13 +591,13 @@ static void test_safe_modes(void **state)
                                   : modes[i].mode == PMA_SAFETY_SAFE_MODE_HOLD
                                       ? dac_counts_of(340.0f)
                                       : dac_counts_of(modes[i].kpa);
-            assert_int_equal(app.dac_counts, want);
+            TEST_ASSERT_EQUAL_INT(want, app.dac_counts);
             /* held there, not slewed */
             for (uint8_t s = 61; s < 70; ++s) {
                 if (bridge) send_sample(s, counts_at(-1.5f));
                 cap_clear();
                 step();
-                assert_int_equal(output_now(), want);
+                TEST_ASSERT_EQUAL_INT(want, output_now());
             }
             pma_fake_adc_clear_fault();
             /* ESTOP from ARMED at the preset */
@@ -623,7 +609,7 @@ static void test_safe_modes(void **state)
                 if (bridge) send_sample(s++, counts_at(-1.5f));
                 step();
             }
-            assert_int_equal(app.dac_counts, T_P0_COUNTS);
+            TEST_ASSERT_EQUAL_INT(T_P0_COUNTS, app.dac_counts);
             pma_can_frame_t f = frame_of(PMA_PROTO_ESTOP_ALL_FRAME_ID, 0, 0, NULL);
             assert_status(pma_fake_can_inject(&f), PMA_OK);
             expect_fault_this_step(PMA_FAULT_ESTOP);
@@ -631,28 +617,27 @@ static void test_safe_modes(void **state)
                                    : modes[i].mode == PMA_SAFETY_SAFE_MODE_HOLD
                                        ? T_P0_COUNTS
                                        : dac_counts_of(modes[i].kpa);
-            assert_int_equal(app.dac_counts, want2);
+            TEST_ASSERT_EQUAL_INT(want2, app.dac_counts);
         }
     }
 }
 
 int main(void)
 {
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_sensor_faults_adc),
-        cmocka_unit_test(test_sensor_faults_bridge),
-        cmocka_unit_test(test_sensor_timeout_bridge),
-        cmocka_unit_test(test_position_limit),
-        cmocka_unit_test(test_tick_overrun),
-        cmocka_unit_test(test_host_heartbeat_lost),
-        cmocka_unit_test(test_non_finite_output),
-        cmocka_unit_test(test_barrier),
-        cmocka_unit_test(test_dac_failure),
-        cmocka_unit_test(test_bus_off),
-        cmocka_unit_test(test_bridge_fault_frame),
-        cmocka_unit_test(test_bridge_actuator_frame_failure_counted),
-        cmocka_unit_test(test_watchdog_reset),
-        cmocka_unit_test(test_safe_modes),
-    };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    UNITY_BEGIN();
+    RUN_TEST(test_sensor_faults_adc);
+    RUN_TEST(test_sensor_faults_bridge);
+    RUN_TEST(test_sensor_timeout_bridge);
+    RUN_TEST(test_position_limit);
+    RUN_TEST(test_tick_overrun);
+    RUN_TEST(test_host_heartbeat_lost);
+    RUN_TEST(test_non_finite_output);
+    RUN_TEST(test_barrier);
+    RUN_TEST(test_dac_failure);
+    RUN_TEST(test_bus_off);
+    RUN_TEST(test_bridge_fault_frame);
+    RUN_TEST(test_bridge_actuator_frame_failure_counted);
+    RUN_TEST(test_watchdog_reset);
+    RUN_TEST(test_safe_modes);
+    return UNITY_END();
 }

@@ -19,7 +19,7 @@ static bool allowed(uint8_t access, pma_param_phase_t phase)
     case PMA_PARAM_LIVE: return true;
     case PMA_PARAM_STOPPED: return phase != PMA_PHASE_RUNNING;
     case PMA_PARAM_IDLE: return phase == PMA_PHASE_INACTIVE;
-    default: fail_msg("unknown access class %u", (unsigned)access); return false;
+    default: pma_test_fail("unknown access class %u", (unsigned)access); return false;
     }
 }
 
@@ -30,45 +30,42 @@ static void reject(uint16_t id, pma_param_type_t type, pma_param_value_t v, pma_
     before = p;
     assert_status(pma_param_check(id, type, v, ph), want);
     assert_status(pma_param_set(&p, id, type, v, ph), want);
-    assert_memory_equal(&p, &before, sizeof p);
+    TEST_ASSERT_EQUAL_MEMORY(&before, &p, sizeof p);
 }
 
-static void test_table_is_sorted_and_consistent(void **state)
+static void test_table_is_sorted_and_consistent(void)
 {
-    (void)state;
     for (size_t i = 0; i < PMA_PARAM_COUNT; ++i) {
         const pma_param_desc_t *d = &pma_param_table[i];
-        if (i > 0) assert_true(pma_param_table[i - 1].id < d->id);
-        assert_true(d->type <= PMA_PARAM_I32);
-        assert_true(d->access <= PMA_PARAM_IDLE);
-        assert_true(d->offset % 4u == 0 && d->offset + 4u <= sizeof(pma_params_t));
-        assert_non_null(d->name);
+        if (i > 0) TEST_ASSERT_GREATER_THAN(pma_param_table[i - 1].id, d->id);
+        TEST_ASSERT_LESS_OR_EQUAL(PMA_PARAM_I32, d->type);
+        TEST_ASSERT_LESS_OR_EQUAL(PMA_PARAM_IDLE, d->access);
+        TEST_ASSERT_TRUE(d->offset % 4u == 0 && d->offset + 4u <= sizeof(pma_params_t));
+        TEST_ASSERT_NOT_NULL(d->name);
         for (size_t j = 0; j < i; ++j) {
-            assert_true(pma_param_table[j].offset != d->offset);
-            assert_true(strcmp(pma_param_table[j].name, d->name) != 0);
+            TEST_ASSERT_TRUE(pma_param_table[j].offset != d->offset);
+            TEST_ASSERT_TRUE(strcmp(pma_param_table[j].name, d->name) != 0);
         }
         /* the default is a value the parameter accepts */
         assert_status(pma_param_check(d->id, (pma_param_type_t)d->type, d->def,
                                       PMA_PHASE_INACTIVE), PMA_OK);
-        assert_ptr_equal(pma_param_find(d->id), d);
+        TEST_ASSERT_EQUAL_PTR(d, pma_param_find(d->id));
     }
     /* every field of pma_params_t belongs to one parameter */
-    assert_int_equal(sizeof(pma_params_t), 4u * PMA_PARAM_COUNT);
+    TEST_ASSERT_EQUAL_INT(4u * PMA_PARAM_COUNT, sizeof(pma_params_t));
 }
 
-static void test_find_unknown_ids(void **state)
+static void test_find_unknown_ids(void)
 {
-    (void)state;
     static const uint16_t unknown[] = {0, 6, 15, 20, 31, 44, 104, 118, 133, 148, 169, 255,
                                        0x7FFF, 0xFFFF};
     for (size_t i = 0; i < sizeof unknown / sizeof unknown[0]; ++i) {
-        assert_null(pma_param_find(unknown[i]));
+        TEST_ASSERT_NULL(pma_param_find(unknown[i]));
     }
 }
 
-static void test_defaults_equal_table(void **state)
+static void test_defaults_equal_table(void)
 {
-    (void)state;
     memset(&p, 0xA5, sizeof p);
     pma_params_defaults(&p);
     for (size_t i = 0; i < PMA_PARAM_COUNT; ++i) {
@@ -76,52 +73,51 @@ static void test_defaults_equal_table(void **state)
         pma_param_type_t type = (pma_param_type_t)99;
         pma_param_value_t v;
         assert_status(pma_param_get(&p, d->id, &type, &v), PMA_OK);
-        assert_int_equal(type, d->type);
-        assert_int_equal(v.u32, d->def.u32); /* bit for bit */
+        TEST_ASSERT_EQUAL_INT(d->type, type);
+        TEST_ASSERT_EQUAL_INT(d->def.u32, v.u32); /* bit for bit */
     }
     /* a few by name, against params.toml */
-    assert_int_equal(p.sys_tick_hz, 1000u);
-    assert_int_equal(p.sys_heartbeat_ms, 100u);
-    assert_int_equal(p.ctrl_mode, PMA_CTRL_MODE_PPC);
-    assert_true(p.ctrl_u_min == -400.0f && p.ctrl_u_max == 400.0f);
-    assert_true(p.ref_offset_cm == -1.5f);
-    assert_int_equal(p.act_polarity, 1);
-    assert_true(p.act_p0_kpa == 300.0f);
-    assert_true(p.safety_x_min_cm == -3.0f && p.safety_x_max_cm == 0.0f);
-    assert_int_equal(p.safety_safe_mode, PMA_SAFETY_SAFE_MODE_VENT);
+    TEST_ASSERT_EQUAL_INT(1000u, p.sys_tick_hz);
+    TEST_ASSERT_EQUAL_INT(100u, p.sys_heartbeat_ms);
+    TEST_ASSERT_EQUAL_INT(PMA_CTRL_MODE_PPC, p.ctrl_mode);
+    TEST_ASSERT_TRUE(p.ctrl_u_min == -400.0f && p.ctrl_u_max == 400.0f);
+    TEST_ASSERT_TRUE(p.ref_offset_cm == -1.5f);
+    TEST_ASSERT_EQUAL_INT(1, p.act_polarity);
+    TEST_ASSERT_TRUE(p.act_p0_kpa == 300.0f);
+    TEST_ASSERT_TRUE(p.safety_x_min_cm == -3.0f && p.safety_x_max_cm == 0.0f);
+    TEST_ASSERT_EQUAL_INT(PMA_SAFETY_SAFE_MODE_VENT, p.safety_safe_mode);
 }
 
-static void test_get_set_each_type(void **state)
+static void test_get_set_each_type(void)
 {
-    (void)state;
     pma_params_defaults(&p);
     pma_param_type_t t;
     pma_param_value_t v;
 
     assert_status(pma_param_set(&p, PMA_PARAM_PPC_C, PMA_PARAM_F32, vf(3.25f), PMA_PHASE_INACTIVE),
                   PMA_OK);
-    assert_true(p.ppc_c == 3.25f);
+    TEST_ASSERT_TRUE(p.ppc_c == 3.25f);
     assert_status(pma_param_get(&p, PMA_PARAM_PPC_C, &t, &v), PMA_OK);
-    assert_int_equal(t, PMA_PARAM_F32);
-    assert_true(v.f32 == 3.25f);
+    TEST_ASSERT_EQUAL_INT(PMA_PARAM_F32, t);
+    TEST_ASSERT_TRUE(v.f32 == 3.25f);
 
     assert_status(pma_param_set(&p, PMA_PARAM_TELEM_DECIMATION, PMA_PARAM_U32, vu(7),
                                 PMA_PHASE_RUNNING), PMA_OK);
-    assert_int_equal(p.telem_decimation, 7u);
+    TEST_ASSERT_EQUAL_INT(7u, p.telem_decimation);
     assert_status(pma_param_get(&p, PMA_PARAM_TELEM_DECIMATION, &t, &v), PMA_OK);
-    assert_int_equal(t, PMA_PARAM_U32);
-    assert_int_equal(v.u32, 7u);
+    TEST_ASSERT_EQUAL_INT(PMA_PARAM_U32, t);
+    TEST_ASSERT_EQUAL_INT(7u, v.u32);
 
     assert_status(pma_param_set(&p, PMA_PARAM_ACT_POLARITY, PMA_PARAM_I32, vi(-1),
                                 PMA_PHASE_INACTIVE), PMA_OK);
-    assert_int_equal(p.act_polarity, -1);
+    TEST_ASSERT_EQUAL_INT(-1, p.act_polarity);
     assert_status(pma_param_get(&p, PMA_PARAM_ACT_POLARITY, &t, &v), PMA_OK);
-    assert_int_equal(t, PMA_PARAM_I32);
-    assert_int_equal(v.i32, -1);
+    TEST_ASSERT_EQUAL_INT(PMA_PARAM_I32, t);
+    TEST_ASSERT_EQUAL_INT(-1, v.i32);
     /* polarity's range is -1..1: 0 is settable (refused later, at ARM) */
     assert_status(pma_param_set(&p, PMA_PARAM_ACT_POLARITY, PMA_PARAM_I32, vi(0),
                                 PMA_PHASE_INACTIVE), PMA_OK);
-    assert_int_equal(p.act_polarity, 0);
+    TEST_ASSERT_EQUAL_INT(0, p.act_polarity);
 
     /* NULL arguments */
     assert_status(pma_param_get(NULL, PMA_PARAM_PPC_C, &t, &v), PMA_ERR_NULL);
@@ -133,9 +129,8 @@ static void test_get_set_each_type(void **state)
 }
 
 /* min and max themselves are accepted, for every parameter. */
-static void test_bounds_inclusive(void **state)
+static void test_bounds_inclusive(void)
 {
-    (void)state;
     for (size_t i = 0; i < PMA_PARAM_COUNT; ++i) {
         const pma_param_desc_t *d = &pma_param_table[i];
         pma_params_defaults(&p);
@@ -144,19 +139,18 @@ static void test_bounds_inclusive(void **state)
         assert_status(pma_param_set(&p, d->id, (pma_param_type_t)d->type, d->min,
                                     PMA_PHASE_INACTIVE), PMA_OK);
         assert_status(pma_param_get(&p, d->id, &t, &v), PMA_OK);
-        assert_int_equal(v.u32, d->min.u32);
+        TEST_ASSERT_EQUAL_INT(d->min.u32, v.u32);
         assert_status(pma_param_set(&p, d->id, (pma_param_type_t)d->type, d->max,
                                     PMA_PHASE_INACTIVE), PMA_OK);
         assert_status(pma_param_get(&p, d->id, &t, &v), PMA_OK);
-        assert_int_equal(v.u32, d->max.u32);
+        TEST_ASSERT_EQUAL_INT(d->max.u32, v.u32);
     }
 }
 
 /* Just below min and just above max, NaN and infinities, wrong types: every
  * parameter, every phase; nothing changes. */
-static void test_rejections_change_nothing(void **state)
+static void test_rejections_change_nothing(void)
 {
-    (void)state;
     pma_params_defaults(&p);
     /* a non-default set, so "unchanged" is not "defaults" */
     p.ppc_c = 5.0f;
@@ -181,7 +175,7 @@ static void test_rejections_change_nothing(void **state)
                 break;
             case PMA_PARAM_U32:
                 if (d->min.u32 > 0) reject(d->id, type, vu(d->min.u32 - 1u), ph, PMA_ERR_RANGE);
-                assert_true(d->max.u32 < UINT32_MAX);
+                TEST_ASSERT_LESS_THAN(UINT32_MAX, d->max.u32);
                 reject(d->id, type, vu(d->max.u32 + 1u), ph, PMA_ERR_RANGE);
                 reject(d->id, type, vu(UINT32_MAX), ph, PMA_ERR_RANGE);
                 reject(d->id, PMA_PARAM_F32, d->def, ph, PMA_ERR_TYPE);
@@ -199,7 +193,7 @@ static void test_rejections_change_nothing(void **state)
             ++checked;
         }
     }
-    assert_int_equal(checked, 3u * PMA_PARAM_COUNT);
+    TEST_ASSERT_EQUAL_INT(3u * PMA_PARAM_COUNT, checked);
     static const uint16_t unknown[] = {0, 7, 170, 0xFFFF};
     for (size_t i = 0; i < sizeof unknown / sizeof unknown[0]; ++i) {
         reject(unknown[i], PMA_PARAM_F32, vf(1.0f), PMA_PHASE_INACTIVE, PMA_ERR_UNKNOWN_ID);
@@ -209,9 +203,8 @@ static void test_rejections_change_nothing(void **state)
 
 /* Access classes: live in every phase, stopped not while RUNNING, idle only
  * while inactive; a refused set (PMA_ERR_STATE) changes nothing. */
-static void test_access_by_phase(void **state)
+static void test_access_by_phase(void)
 {
-    (void)state;
     uint32_t refused = 0, accepted = 0;
     uint32_t per_class[3] = {0, 0, 0};
     for (size_t i = 0; i < PMA_PARAM_COUNT; ++i) {
@@ -227,7 +220,7 @@ static void test_access_by_phase(void **state)
                 pma_param_type_t t;
                 pma_param_value_t got;
                 assert_status(pma_param_get(&p, d->id, &t, &got), PMA_OK);
-                assert_int_equal(got.u32, v.u32);
+                TEST_ASSERT_EQUAL_INT(v.u32, got.u32);
                 ++accepted;
             } else {
                 reject(d->id, (pma_param_type_t)d->type, v, phases[k], PMA_ERR_STATE);
@@ -236,36 +229,35 @@ static void test_access_by_phase(void **state)
         }
     }
     /* each class is populated, so each rule was exercised */
-    assert_true(per_class[PMA_PARAM_LIVE] > 0 && per_class[PMA_PARAM_STOPPED] > 0 &&
+    TEST_ASSERT_TRUE(per_class[PMA_PARAM_LIVE] > 0 && per_class[PMA_PARAM_STOPPED] > 0 &&
                 per_class[PMA_PARAM_IDLE] > 0);
-    assert_int_equal(refused, per_class[PMA_PARAM_STOPPED] + 2u * per_class[PMA_PARAM_IDLE]);
-    assert_int_equal(accepted + refused, 3u * PMA_PARAM_COUNT);
+    TEST_ASSERT_EQUAL_INT(per_class[PMA_PARAM_STOPPED] + 2u * per_class[PMA_PARAM_IDLE], refused);
+    TEST_ASSERT_EQUAL_INT(3u * PMA_PARAM_COUNT, accepted + refused);
     /* spot checks against params.toml */
-    assert_int_equal(pma_param_find(PMA_PARAM_SAFETY_X_MAX_CM)->access, PMA_PARAM_IDLE);
-    assert_int_equal(pma_param_find(PMA_PARAM_CTRL_MODE)->access, PMA_PARAM_STOPPED);
-    assert_int_equal(pma_param_find(PMA_PARAM_CTRL_OPENLOOP_U)->access, PMA_PARAM_LIVE);
+    TEST_ASSERT_EQUAL_INT(PMA_PARAM_IDLE, pma_param_find(PMA_PARAM_SAFETY_X_MAX_CM)->access);
+    TEST_ASSERT_EQUAL_INT(PMA_PARAM_STOPPED, pma_param_find(PMA_PARAM_CTRL_MODE)->access);
+    TEST_ASSERT_EQUAL_INT(PMA_PARAM_LIVE, pma_param_find(PMA_PARAM_CTRL_OPENLOOP_U)->access);
 }
 
-static void test_next_id_enumerates_in_order(void **state)
+static void test_next_id_enumerates_in_order(void)
 {
-    (void)state;
     uint16_t id = 0, next = 0;
     size_t n = 0;
     while (pma_param_next_id(id, &next) == PMA_OK) {
-        assert_true(n < PMA_PARAM_COUNT);
-        assert_true(next > id);
-        assert_int_equal(next, pma_param_table[n].id); /* every id once, in order */
+        TEST_ASSERT_LESS_THAN(PMA_PARAM_COUNT, n);
+        TEST_ASSERT_GREATER_THAN(id, next);
+        TEST_ASSERT_EQUAL_INT(pma_param_table[n].id, next); /* every id once, in order */
         id = next;
         ++n;
     }
-    assert_int_equal(n, PMA_PARAM_COUNT);
+    TEST_ASSERT_EQUAL_INT(PMA_PARAM_COUNT, n);
     assert_status(pma_param_next_id(id, &next), PMA_ERR_EMPTY);
     assert_status(pma_param_next_id(0xFFFF, &next), PMA_ERR_EMPTY);
     /* from inside a gap and from an existing id */
     assert_status(pma_param_next_id(9, &next), PMA_OK); /* the gap after sys.plant_bridge (8) */
-    assert_int_equal(next, PMA_PARAM_CTRL_MODE);
+    TEST_ASSERT_EQUAL_INT(PMA_PARAM_CTRL_MODE, next);
     assert_status(pma_param_next_id(PMA_PARAM_CTRL_MODE, &next), PMA_OK);
-    assert_int_equal(next, PMA_PARAM_CTRL_U_MIN);
+    TEST_ASSERT_EQUAL_INT(PMA_PARAM_CTRL_U_MIN, next);
     assert_status(pma_param_next_id(0, NULL), PMA_ERR_NULL);
 }
 
@@ -290,96 +282,92 @@ static void put_entry(uint8_t *e, uint16_t id, uint32_t raw)
     for (unsigned b = 0; b < 4u; ++b) e[2u + b] = (uint8_t)(raw >> (8u * b));
 }
 
-static void test_serialize_round_trip(void **state)
+static void test_serialize_round_trip(void)
 {
-    (void)state;
     non_default_set(&before);
-    assert_int_equal(pma_params_serialize(&before, blob, sizeof blob), PMA_PARAMS_BLOB_BYTES);
-    assert_int_equal(PMA_PARAMS_BLOB_BYTES, 6u * PMA_PARAM_COUNT);
+    TEST_ASSERT_EQUAL_INT(PMA_PARAMS_BLOB_BYTES, pma_params_serialize(&before, blob, sizeof blob));
+    TEST_ASSERT_EQUAL_INT(6u * PMA_PARAM_COUNT, PMA_PARAMS_BLOB_BYTES);
     /* layout: little-endian id, then the raw value */
     for (size_t i = 0; i < PMA_PARAM_COUNT; ++i) {
         const uint8_t *e = blob + i * PMA_PARAMS_ENTRY_BYTES;
-        assert_int_equal(e[0] | (e[1] << 8), pma_param_table[i].id);
+        TEST_ASSERT_EQUAL_INT(pma_param_table[i].id, e[0] | (e[1] << 8));
     }
     const uint8_t *e = blob; /* sys.node_id = max 15 */
-    assert_true(e[2] == 15u && e[3] == 0 && e[4] == 0 && e[5] == 0);
+    TEST_ASSERT_TRUE(e[2] == 15u && e[3] == 0 && e[4] == 0 && e[5] == 0);
     memset(&p, 0, sizeof p);
-    assert_int_equal(pma_params_deserialize(&p, blob, PMA_PARAMS_BLOB_BYTES), 0);
-    assert_memory_equal(&p, &before, sizeof p);
+    TEST_ASSERT_EQUAL_INT(0, pma_params_deserialize(&p, blob, PMA_PARAMS_BLOB_BYTES));
+    TEST_ASSERT_EQUAL_MEMORY(&before, &p, sizeof p);
     /* capacity too small: nothing written */
-    assert_int_equal(pma_params_serialize(&before, blob, PMA_PARAMS_BLOB_BYTES - 1u), 0);
-    assert_int_equal(pma_params_serialize(NULL, blob, sizeof blob), 0);
-    assert_int_equal(pma_params_serialize(&before, NULL, sizeof blob), 0);
+    TEST_ASSERT_EQUAL_INT(0, pma_params_serialize(&before, blob, PMA_PARAMS_BLOB_BYTES - 1u));
+    TEST_ASSERT_EQUAL_INT(0, pma_params_serialize(NULL, blob, sizeof blob));
+    TEST_ASSERT_EQUAL_INT(0, pma_params_serialize(&before, NULL, sizeof blob));
 }
 
-static void test_deserialize_skips_unknown_ids(void **state)
+static void test_deserialize_skips_unknown_ids(void)
 {
-    (void)state;
     non_default_set(&before);
-    assert_int_equal(pma_params_serialize(&before, blob, sizeof blob), PMA_PARAMS_BLOB_BYTES);
+    TEST_ASSERT_EQUAL_INT(PMA_PARAMS_BLOB_BYTES, pma_params_serialize(&before, blob, sizeof blob));
     /* a newer firmware's parameters, one at the front and one at the end */
     memmove(blob + PMA_PARAMS_ENTRY_BYTES, blob, PMA_PARAMS_BLOB_BYTES);
     put_entry(blob, 6, 0xDEADBEEFu);
     put_entry(blob + PMA_PARAMS_BLOB_BYTES + PMA_PARAMS_ENTRY_BYTES, 999, 1u);
-    assert_int_equal(pma_params_deserialize(&p, blob, sizeof blob), 0);
-    assert_memory_equal(&p, &before, sizeof p);
+    TEST_ASSERT_EQUAL_INT(0, pma_params_deserialize(&p, blob, sizeof blob));
+    TEST_ASSERT_EQUAL_MEMORY(&before, &p, sizeof p);
 }
 
-static void test_deserialize_rejects_to_default(void **state)
+static void test_deserialize_rejects_to_default(void)
 {
-    (void)state;
     non_default_set(&before);
-    assert_int_equal(pma_params_serialize(&before, blob, sizeof blob), PMA_PARAMS_BLOB_BYTES);
+    TEST_ASSERT_EQUAL_INT(PMA_PARAMS_BLOB_BYTES, pma_params_serialize(&before, blob, sizeof blob));
     /* entry 1: sys.tick_hz = 10 (below 50); ppc.c NaN; act.polarity 2; u32 far above */
     size_t i_tick = 1, i_c = 0, i_pol = 0, i_mask = 4;
     for (size_t i = 0; i < PMA_PARAM_COUNT; ++i) {
         if (pma_param_table[i].id == PMA_PARAM_PPC_C) i_c = i;
         if (pma_param_table[i].id == PMA_PARAM_ACT_POLARITY) i_pol = i;
     }
-    assert_int_equal(pma_param_table[i_tick].id, PMA_PARAM_SYS_TICK_HZ);
-    assert_int_equal(pma_param_table[i_mask].id, PMA_PARAM_TELEM_MASK);
+    TEST_ASSERT_EQUAL_INT(PMA_PARAM_SYS_TICK_HZ, pma_param_table[i_tick].id);
+    TEST_ASSERT_EQUAL_INT(PMA_PARAM_TELEM_MASK, pma_param_table[i_mask].id);
     pma_param_value_t nan;
     nan.f32 = NAN;
     put_entry(blob + i_tick * 6u, PMA_PARAM_SYS_TICK_HZ, 10u);
     put_entry(blob + i_c * 6u, PMA_PARAM_PPC_C, nan.u32);
     put_entry(blob + i_pol * 6u, PMA_PARAM_ACT_POLARITY, 2u);
     put_entry(blob + i_mask * 6u, PMA_PARAM_TELEM_MASK, 32u);
-    assert_int_equal(pma_params_deserialize(&p, blob, PMA_PARAMS_BLOB_BYTES), 4);
-    assert_int_equal(p.sys_tick_hz, 1000u);       /* defaults */
-    assert_true(p.ppc_c == 2.0f);
-    assert_int_equal(p.act_polarity, 1);
-    assert_int_equal(p.telem_mask, 31u);
+    TEST_ASSERT_EQUAL_INT(4, pma_params_deserialize(&p, blob, PMA_PARAMS_BLOB_BYTES));
+    TEST_ASSERT_EQUAL_INT(1000u, p.sys_tick_hz);       /* defaults */
+    TEST_ASSERT_TRUE(p.ppc_c == 2.0f);
+    TEST_ASSERT_EQUAL_INT(1, p.act_polarity);
+    TEST_ASSERT_EQUAL_INT(31u, p.telem_mask);
     /* the rest as stored */
     before.sys_tick_hz = 1000u;
     before.ppc_c = 2.0f;
     before.act_polarity = 1;
     before.telem_mask = 31u;
-    assert_memory_equal(&p, &before, sizeof p);
+    TEST_ASSERT_EQUAL_MEMORY(&before, &p, sizeof p);
 }
 
-static void test_deserialize_partial_and_bad_length(void **state)
+static void test_deserialize_partial_and_bad_length(void)
 {
-    (void)state;
     non_default_set(&before);
-    assert_int_equal(pma_params_serialize(&before, blob, sizeof blob), PMA_PARAMS_BLOB_BYTES);
+    TEST_ASSERT_EQUAL_INT(PMA_PARAMS_BLOB_BYTES, pma_params_serialize(&before, blob, sizeof blob));
     /* only the first three entries: the rest keep their defaults */
-    assert_int_equal(pma_params_deserialize(&p, blob, 3u * PMA_PARAMS_ENTRY_BYTES), 0);
-    assert_int_equal(p.sys_node_id, before.sys_node_id);
-    assert_int_equal(p.sys_tick_hz, before.sys_tick_hz);
-    assert_int_equal(p.sys_heartbeat_ms, before.sys_heartbeat_ms);
-    assert_int_equal(p.telem_decimation, 10u);
-    assert_true(p.safety_safe_kpa == 0.0f);
+    TEST_ASSERT_EQUAL_INT(0, pma_params_deserialize(&p, blob, 3u * PMA_PARAMS_ENTRY_BYTES));
+    TEST_ASSERT_EQUAL_INT(before.sys_node_id, p.sys_node_id);
+    TEST_ASSERT_EQUAL_INT(before.sys_tick_hz, p.sys_tick_hz);
+    TEST_ASSERT_EQUAL_INT(before.sys_heartbeat_ms, p.sys_heartbeat_ms);
+    TEST_ASSERT_EQUAL_INT(10u, p.telem_decimation);
+    TEST_ASSERT_TRUE(p.safety_safe_kpa == 0.0f);
     /* empty: defaults */
     pma_params_t def;
     pma_params_defaults(&def);
-    assert_int_equal(pma_params_deserialize(&p, blob, 0), 0);
-    assert_memory_equal(&p, &def, sizeof p);
+    TEST_ASSERT_EQUAL_INT(0, pma_params_deserialize(&p, blob, 0));
+    TEST_ASSERT_EQUAL_MEMORY(&def, &p, sizeof p);
     /* not a whole number of entries: PMA_ERR_RANGE and the defaults */
     static const size_t bad[] = {1, 5, 7, PMA_PARAMS_BLOB_BYTES - 1u, PMA_PARAMS_BLOB_BYTES + 1u};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
         memset(&p, 0x5A, sizeof p);
         assert_status(pma_params_deserialize(&p, blob, bad[i]), PMA_ERR_RANGE);
-        assert_memory_equal(&p, &def, sizeof p);
+        TEST_ASSERT_EQUAL_MEMORY(&def, &p, sizeof p);
     }
     assert_status(pma_params_deserialize(NULL, blob, 6), PMA_ERR_NULL);
     assert_status(pma_params_deserialize(&p, NULL, 6), PMA_ERR_NULL);
@@ -387,19 +375,18 @@ static void test_deserialize_partial_and_bad_length(void **state)
 
 int main(void)
 {
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_table_is_sorted_and_consistent),
-        cmocka_unit_test(test_find_unknown_ids),
-        cmocka_unit_test(test_defaults_equal_table),
-        cmocka_unit_test(test_get_set_each_type),
-        cmocka_unit_test(test_bounds_inclusive),
-        cmocka_unit_test(test_rejections_change_nothing),
-        cmocka_unit_test(test_access_by_phase),
-        cmocka_unit_test(test_next_id_enumerates_in_order),
-        cmocka_unit_test(test_serialize_round_trip),
-        cmocka_unit_test(test_deserialize_skips_unknown_ids),
-        cmocka_unit_test(test_deserialize_rejects_to_default),
-        cmocka_unit_test(test_deserialize_partial_and_bad_length),
-    };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    UNITY_BEGIN();
+    RUN_TEST(test_table_is_sorted_and_consistent);
+    RUN_TEST(test_find_unknown_ids);
+    RUN_TEST(test_defaults_equal_table);
+    RUN_TEST(test_get_set_each_type);
+    RUN_TEST(test_bounds_inclusive);
+    RUN_TEST(test_rejections_change_nothing);
+    RUN_TEST(test_access_by_phase);
+    RUN_TEST(test_next_id_enumerates_in_order);
+    RUN_TEST(test_serialize_round_trip);
+    RUN_TEST(test_deserialize_skips_unknown_ids);
+    RUN_TEST(test_deserialize_rejects_to_default);
+    RUN_TEST(test_deserialize_partial_and_bad_length);
+    return UNITY_END();
 }

@@ -15,17 +15,16 @@
  * 4095 counts = 900 kPa) the moment the parameter is set.
  * Fix: clamp the FIXED pressure to [0, p_max] in pma_actuator_safe_kpa (or
  * vent when the configuration is invalid), or refuse the SET. */
-static void test_was_bug_fixed_safe_pressure_above_p_max(void **state)
+static void test_was_bug_fixed_safe_pressure_above_p_max(void)
 {
-    (void)state;
     to_idle(0);
     set_u32(PMA_PARAM_SAFETY_SAFE_MODE, PMA_SAFETY_SAFE_MODE_FIXED);
     set_f32(PMA_PARAM_SAFETY_SAFE_KPA, 1000.0f); /* accepted: within its own range */
     step();
     const uint16_t limit = dac_counts_of(app.params.act_p_max_kpa); /* 2730 */
     const uint16_t out = dac_now();
-    print_message("idle output %u counts, act.p_max_kpa is %u counts\n", out, limit);
-    assert_true(out <= limit);
+    printf("idle output %u counts, act.p_max_kpa is %u counts\n", out, limit);
+    TEST_ASSERT_LESS_OR_EQUAL(limit, out);
 }
 
 /* WAS BUG 2: an invalid DAC scaling set in the same step as DISARM (or ESTOP)
@@ -37,11 +36,10 @@ static void test_was_bug_fixed_safe_pressure_above_p_max(void **state)
  * Fix: when the conversion fails while the output is inactive, write a fixed
  * safe code (e.g. 0 counts, or the counts of the last valid safe value), or
  * validate the dac.* parameters as a set at SET time. */
-static void test_was_bug_invalid_dac_scaling_keeps_active_output_after_disarm(void **state)
+static void test_was_bug_invalid_dac_scaling_keeps_active_output_after_disarm(void)
 {
-    (void)state;
     to_armed(0);
-    assert_int_equal(dac_now(), T_P0_COUNTS);
+    TEST_ASSERT_EQUAL_INT(T_P0_COUNTS, dac_now());
     inject(PMA_PROTO_COMMAND_FRAME_ID, 2, (const uint8_t[]){PMA_CMD_DISARM, 0});
     struct pma_proto_param_req_t m;
     memset(&m, 0, sizeof m);
@@ -50,7 +48,7 @@ static void test_was_bug_invalid_dac_scaling_keeps_active_output_after_disarm(vo
     m.id = PMA_PARAM_DAC_COUNTS_PER_KPA;
     m.value_f32 = 0.0f;
     uint8_t d[8];
-    assert_int_equal(pma_proto_param_req_pack(d, &m, sizeof d), 8);
+    TEST_ASSERT_EQUAL_INT(8, pma_proto_param_req_pack(d, &m, sizeof d));
     inject(PMA_PROTO_PARAM_REQ_FRAME_ID, 8, d);
     cap_clear();
     step();
@@ -59,13 +57,12 @@ static void test_was_bug_invalid_dac_scaling_keeps_active_output_after_disarm(vo
     assert_status(decode_param_resp(last_frame(PMA_PROTO_PARAM_RESP_FRAME_ID)).result, PMA_ERR_RANGE);
     steps(5);
     const uint16_t out = dac_now();
-    print_message("IDLE (VENT) output: %u counts\n", out);
-    assert_int_equal(out, 0);
+    printf("IDLE (VENT) output: %u counts\n", out);
+    TEST_ASSERT_EQUAL_INT(0, out);
 }
 
-static void test_was_bug_invalid_dac_scaling_keeps_active_output_after_estop(void **state)
+static void test_was_bug_invalid_dac_scaling_keeps_active_output_after_estop(void)
 {
-    (void)state;
     to_running(0);
     const pma_can_frame_t e = frame_of(PMA_PROTO_ESTOP_FRAME_ID, T_NODE, 0, NULL);
     assert_status(pma_fake_can_inject(&e), PMA_OK);
@@ -76,14 +73,14 @@ static void test_was_bug_invalid_dac_scaling_keeps_active_output_after_estop(voi
     m.id = PMA_PARAM_DAC_MIN_COUNTS;
     m.value_u32 = 5000; /* above dac.max_counts */
     uint8_t d[8];
-    assert_int_equal(pma_proto_param_req_pack(d, &m, sizeof d), 8);
+    TEST_ASSERT_EQUAL_INT(8, pma_proto_param_req_pack(d, &m, sizeof d));
     inject(PMA_PROTO_PARAM_REQ_FRAME_ID, 8, d);
     cap_clear();
     step();
     assert_state(app.state, PMA_STATE_FAULT);
     const uint16_t out = dac_now();
-    print_message("FAULT (VENT) output: %u counts\n", out);
-    assert_int_equal(out, 0);
+    printf("FAULT (VENT) output: %u counts\n", out);
+    TEST_ASSERT_EQUAL_INT(0, out);
 }
 
 /* WAS BUG 3: a stored parameter set longer than this firmware's blob (written by
@@ -107,7 +104,7 @@ static void store_longer_blob(void)
     pma_params_defaults(&p);
     p.ppc_c = 5.0f;
     p.telem_mask = 7u;
-    assert_int_equal(pma_params_serialize(&p, big, sizeof big), PMA_PARAMS_BLOB_BYTES);
+    TEST_ASSERT_EQUAL_INT(PMA_PARAMS_BLOB_BYTES, pma_params_serialize(&p, big, sizeof big));
     for (unsigned i = 0; i < 5u; ++i) {
         uint8_t *e = big + PMA_PARAMS_BLOB_BYTES + i * PMA_PARAMS_ENTRY_BYTES;
         e[0] = (uint8_t)(200u + i);
@@ -116,25 +113,24 @@ static void store_longer_blob(void)
         e[3] = e[4] = e[5] = 0;
     }
     /* the parser itself accepts it */
-    assert_int_equal(pma_params_deserialize(&p, big, sizeof big), 0);
-    assert_true(p.ppc_c == 5.0f);
+    TEST_ASSERT_EQUAL_INT(0, pma_params_deserialize(&p, big, sizeof big));
+    TEST_ASSERT_TRUE(p.ppc_c == 5.0f);
     assert_status(pma_pstore_init(&ps, T_FIRST, T_BPS), PMA_OK);
     assert_status(pma_pstore_save(&ps, big, sizeof big, PMA_PARAMS_BLOB_VERSION), PMA_OK);
 }
 
-static void test_was_bug_longer_stored_blob_not_loaded(void **state)
+static void test_was_bug_longer_stored_blob_not_loaded(void)
 {
-    (void)state;
     start_with(0, -1.5f);
     store_longer_blob();
     pma_fake_reboot();
     assert_status(restart_app(), PMA_OK);
-    print_message("after restart: ppc.c %g, telem.mask %lu, params_default %u\n",
-                  (double)app.params.ppc_c, (unsigned long)app.params.telem_mask,
-                  app.params_default);
-    assert_true(app.params.ppc_c == 5.0f);
-    assert_int_equal(app.params.telem_mask, 7u);
-    assert_int_equal(app.params_default, 0);
+    printf("after restart: ppc.c %g, telem.mask %lu, params_default %u\n",
+           (double)app.params.ppc_c, (unsigned long)app.params.telem_mask,
+           app.params_default);
+    TEST_ASSERT_TRUE(app.params.ppc_c == 5.0f);
+    TEST_ASSERT_EQUAL_INT(7u, app.params.telem_mask);
+    TEST_ASSERT_EQUAL_INT(0, app.params_default);
 }
 
 /* WAS BUG 4: plant bridge: ARM is accepted with a sample far older than
@@ -144,15 +140,14 @@ static void test_was_bug_longer_stored_blob_not_loaded(void **state)
  * output is active.
  * Fix: in cmd_arm, refuse (PMA_ERR_NOT_READY) when plant_bridge and
  * ticks_since_sample >= safety.sensor_timeout_ticks. */
-static void test_was_bug_arm_accepted_with_stale_bridge_sample(void **state)
+static void test_was_bug_arm_accepted_with_stale_bridge_sample(void)
 {
-    (void)state;
     to_idle(1);
     steps(50); /* the rig stopped sending 50 ticks ago (timeout: 10) */
     const struct pma_proto_command_ack_t a = command(PMA_CMD_ARM, 0);
-    print_message("ARM with a 51-tick-old sample: %s, then %s fault %s\n",
-                  pma_status_name(a.result), pma_app_state_name(app.state),
-                  pma_fault_name(app.fault));
+    printf("ARM with a 51-tick-old sample: %s, then %s fault %s\n",
+           pma_status_name(a.result), pma_app_state_name(app.state),
+           pma_fault_name(app.fault));
     assert_status(a.result, PMA_ERR_NOT_READY);
     assert_state(app.state, PMA_STATE_IDLE);
 }
@@ -165,9 +160,8 @@ static void test_was_bug_arm_accepted_with_stale_bridge_sample(void **state)
  * in the pure function only.)
  * Fix: return pma_actuator_safe_kpa(c, p_prev_kpa) (it already maps a
  * non-finite p_prev to 0). */
-static void test_was_bug_hold_with_nan_u_vents(void **state)
+static void test_was_bug_hold_with_nan_u_vents(void)
 {
-    (void)state;
     const pma_actuator_config_t ac = {
         .p0_kpa = 300.0f, .kpa_per_u = 1.0f, .polarity = 1, .p_min_kpa = 0.0f,
         .p_max_kpa = 600.0f, .slew_kpa_s = 20000.0f, .safe_mode = PMA_SAFE_HOLD,
@@ -178,13 +172,12 @@ static void test_was_bug_hold_with_nan_u_vents(void **state)
 
 int main(void)
 {
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_was_bug_fixed_safe_pressure_above_p_max),
-        cmocka_unit_test(test_was_bug_invalid_dac_scaling_keeps_active_output_after_disarm),
-        cmocka_unit_test(test_was_bug_invalid_dac_scaling_keeps_active_output_after_estop),
-        cmocka_unit_test(test_was_bug_longer_stored_blob_not_loaded),
-        cmocka_unit_test(test_was_bug_arm_accepted_with_stale_bridge_sample),
-        cmocka_unit_test(test_was_bug_hold_with_nan_u_vents),
-    };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    UNITY_BEGIN();
+    RUN_TEST(test_was_bug_fixed_safe_pressure_above_p_max);
+    RUN_TEST(test_was_bug_invalid_dac_scaling_keeps_active_output_after_disarm);
+    RUN_TEST(test_was_bug_invalid_dac_scaling_keeps_active_output_after_estop);
+    RUN_TEST(test_was_bug_longer_stored_blob_not_loaded);
+    RUN_TEST(test_was_bug_arm_accepted_with_stale_bridge_sample);
+    RUN_TEST(test_was_bug_hold_with_nan_u_vents);
+    return UNITY_END();
 }

@@ -66,17 +66,16 @@ static bool params_are(const uint32_t *want)
 static void save_ok(void)
 {
     assert_status(whole_op(PMA_PARAM_OP_SAVE), PMA_OK);
-    assert_int_equal(app.save_failed, 0);
+    TEST_ASSERT_EQUAL_INT(0, app.save_failed);
 }
 
 /* -------------------------------------------------------------------------- */
 
-static void test_save_then_restart_loads(void **state)
+static void test_save_then_restart_loads(void)
 {
-    (void)state;
     defaults = default_crc();
     to_idle(0);
-    assert_int_equal(app.params_default, 1);
+    TEST_ASSERT_EQUAL_INT(1, app.params_default);
     apply_a(&set_a);
     set_u32(PMA_PARAM_SYS_TICK_HZ, 500);
     set_a = params_crc(&app.params);
@@ -84,65 +83,65 @@ static void test_save_then_restart_loads(void **state)
     /* a software reboot */
     pma_fake_reboot();
     assert_status(restart_app(), PMA_OK);
-    assert_true(params_are(&set_a));
+    TEST_ASSERT_TRUE(params_are(&set_a));
     struct pma_proto_heartbeat_t h = last_heartbeat(); /* the BOOT one */
-    assert_int_equal(h.reset_cause, PMA_RESET_SOFTWARE);
-    assert_int_equal(h.controller, PMA_CTRL_MODE_PID);
-    assert_false(h.flags & (PMA_HB_PARAMS_DEFAULT | PMA_HB_PARAMS_CHANGED | PMA_HB_SAVE_FAILED));
+    TEST_ASSERT_EQUAL_INT(PMA_RESET_SOFTWARE, h.reset_cause);
+    TEST_ASSERT_EQUAL_INT(PMA_CTRL_MODE_PID, h.controller);
+    TEST_ASSERT_FALSE(h.flags &
+                      (PMA_HB_PARAMS_DEFAULT | PMA_HB_PARAMS_CHANGED | PMA_HB_SAVE_FAILED));
     /* the loaded timing is in force: 500 Hz ticks, heartbeat every 200 ms */
     uint64_t t0 = pma_hal_time_us();
     step();
-    assert_int_equal(pma_hal_time_us() - t0, 2000u);
+    TEST_ASSERT_EQUAL_INT(2000u, pma_hal_time_us() - t0);
     (void)next_heartbeat();
     t0 = pma_hal_time_us();
     (void)next_heartbeat();
-    assert_int_equal(pma_hal_time_us() - t0, 200000u);
+    TEST_ASSERT_EQUAL_INT(200000u, pma_hal_time_us() - t0);
     /* read back through GET as a host would */
     presp_t r = param_req(PMA_PARAM_OP_GET, 0, PMA_PARAM_ACT_POLARITY, vu(0));
-    assert_int_equal(r.v.i32, -1);
+    TEST_ASSERT_EQUAL_INT(-1, r.v.i32);
     r = param_req(PMA_PARAM_OP_GET, 0, PMA_PARAM_PPC_C, vu(0));
-    assert_true(r.v.f32 == 3.0f);
+    TEST_ASSERT_TRUE(r.v.f32 == 3.0f);
     /* a power cycle */
     pma_fake_power_on();
     assert_status(restart_app(), PMA_OK);
-    assert_true(params_are(&set_a));
-    assert_int_equal(last_heartbeat().reset_cause, PMA_RESET_POWER_ON);
+    TEST_ASSERT_TRUE(params_are(&set_a));
+    TEST_ASSERT_EQUAL_INT(PMA_RESET_POWER_ON, last_heartbeat().reset_cause);
     /* RESTORE_DEFAULTS is RAM only: the stored set comes back at the next start */
     assert_status(whole_op(PMA_PARAM_OP_RESTORE_DEFAULTS), PMA_OK);
-    assert_true(params_are(&defaults));
+    TEST_ASSERT_TRUE(params_are(&defaults));
     pma_fake_reboot();
     assert_status(restart_app(), PMA_OK);
-    assert_true(params_are(&set_a));
+    TEST_ASSERT_TRUE(params_are(&set_a));
     /* an unsaved SET is lost at a restart */
     set_f32(PMA_PARAM_PPC_C, 9.0f);
     pma_fake_reboot();
     assert_status(restart_app(), PMA_OK);
-    assert_true(params_are(&set_a));
+    TEST_ASSERT_TRUE(params_are(&set_a));
 }
 
 /* sys.node_id takes effect at the next start-up (platform node id -1). */
-static void test_saved_node_id(void **state)
+static void test_saved_node_id(void)
 {
-    (void)state;
     start_with(0, -1.5f);
     plat.node_id = -1;
     assert_status(pma_app_init(&app, &plat), PMA_OK);
     cap_clear();
     drain();
-    assert_int_equal(app.node_id, 0);
+    TEST_ASSERT_EQUAL_INT(0, app.node_id);
     step();
     set_u32(PMA_PARAM_SYS_NODE_ID, 7);
-    assert_int_equal(app.node_id, 0); /* not yet */
+    TEST_ASSERT_EQUAL_INT(0, app.node_id); /* not yet */
     save_ok();
     pma_fake_reboot();
     assert_status(restart_app(), PMA_OK);
-    assert_int_equal(app.node_id, 7);
-    assert_int_equal(last_frame(PMA_PROTO_HEARTBEAT_FRAME_ID)->id,
-                     PMA_PROTO_HEARTBEAT_FRAME_ID | 7u);
+    TEST_ASSERT_EQUAL_INT(7, app.node_id);
+    TEST_ASSERT_EQUAL_HEX16(PMA_PROTO_HEARTBEAT_FRAME_ID | 7u,
+                            last_frame(PMA_PROTO_HEARTBEAT_FRAME_ID)->id);
     /* node 0's frames no longer reach it; node 7's do */
     pma_can_frame_t f = frame_of(PMA_PROTO_COMMAND_FRAME_ID, 0, 2,
                                  (const uint8_t[]){PMA_CMD_ESTOP, 0});
-    assert_int_equal(pma_fake_can_inject(&f), PMA_FAKE_CAN_FILTERED);
+    TEST_ASSERT_EQUAL_INT(PMA_FAKE_CAN_FILTERED, pma_fake_can_inject(&f));
     step();
     command_ok(PMA_CMD_ARM, 0, PMA_OK);
     assert_state(app.state, PMA_STATE_ARMED);
@@ -179,9 +178,9 @@ static void cut_once(int scenario, bool ecc, uint32_t op, uint32_t ops, uint32_t
     const presp_t r = param_req(PMA_PARAM_OP_SAVE, 0, 0, vu(0));
     if (op < ops) {
         assert_status(r.result, PMA_ERR_IO);
-        assert_int_equal(app.save_failed, 1);
-        assert_int_equal(app.params_changed, 1);
-        assert_true(pma_fake_nvm_power_lost());
+        TEST_ASSERT_EQUAL_INT(1, app.save_failed);
+        TEST_ASSERT_EQUAL_INT(1, app.params_changed);
+        TEST_ASSERT_TRUE(pma_fake_nvm_power_lost());
     } else {
         assert_status(r.result, PMA_OK);
     }
@@ -192,29 +191,28 @@ static void cut_once(int scenario, bool ecc, uint32_t op, uint32_t ops, uint32_t
     const struct pma_proto_heartbeat_t h = last_heartbeat();
     if (params_are(&set_b)) {
         ++tally.new_sets;
-        assert_false(h.flags & PMA_HB_PARAMS_DEFAULT);
+        TEST_ASSERT_FALSE(h.flags & PMA_HB_PARAMS_DEFAULT);
     } else if (scenario >= 1 && params_are(&set_a)) {
         ++tally.old_sets;
-        assert_false(h.flags & PMA_HB_PARAMS_DEFAULT);
+        TEST_ASSERT_FALSE(h.flags & PMA_HB_PARAMS_DEFAULT);
     } else if (scenario == 0 && params_are(&defaults)) {
         ++tally.defaults;
-        assert_true(h.flags & PMA_HB_PARAMS_DEFAULT);
+        TEST_ASSERT_TRUE(h.flags & PMA_HB_PARAMS_DEFAULT);
     } else {
-        print_error("scenario %d%s: cut at op %lu of %lu, %lu permille: loaded neither the "
-                    "old nor the new set (ppc.c %g, telem.decimation %lu)\n", scenario,
-                    ecc ? " (ECC)" : "", (unsigned long)op, (unsigned long)ops,
-                    (unsigned long)permille, (double)app.params.ppc_c,
-                    (unsigned long)app.params.telem_decimation);
-        fail();
+        pma_test_fail("scenario %d%s: cut at op %lu of %lu, %lu permille: loaded neither the "
+                      "old nor the new set (ppc.c %g, telem.decimation %lu)", scenario,
+                      ecc ? " (ECC)" : "", (unsigned long)op, (unsigned long)ops,
+                      (unsigned long)permille, (double)app.params.ppc_c,
+                      (unsigned long)app.params.telem_decimation);
     }
-    assert_false(h.flags & (PMA_HB_SAVE_FAILED | PMA_HB_PARAMS_CHANGED));
+    TEST_ASSERT_FALSE(h.flags & (PMA_HB_SAVE_FAILED | PMA_HB_PARAMS_CHANGED));
     /* storage works again: B saved and loaded */
     step();
     if (!params_are(&set_b)) apply_b(&set_b);
     save_ok();
     pma_fake_reboot();
     assert_status(restart_app(), PMA_OK);
-    assert_true(params_are(&set_b));
+    TEST_ASSERT_TRUE(params_are(&set_b));
 }
 
 static void sweep(int scenario)
@@ -228,7 +226,8 @@ static void sweep(int scenario)
         const uint32_t before = pma_fake_nvm_op_count();
         save_ok();
         const uint32_t ops = pma_fake_nvm_op_count() - before;
-        assert_true(ops >= 2u * ((PMA_PARAMS_BLOB_BYTES + 20u) / T_BLOCK)); /* erases, programs */
+        /* erases, programs */
+        TEST_ASSERT_GREATER_OR_EQUAL(2u * ((PMA_PARAMS_BLOB_BYTES + 20u) / T_BLOCK), ops);
         static const uint32_t permilles[] = {0, 500, 1000};
         for (uint32_t op = 0; op <= ops; ++op) {
             for (size_t k = 0; k < sizeof permilles / sizeof permilles[0]; ++k) {
@@ -236,164 +235,159 @@ static void sweep(int scenario)
             }
         }
     }
-    print_message("scenario %d: %lu power cuts: old set %lu, new set %lu, defaults %lu\n",
-                  scenario, (unsigned long)tally.cuts, (unsigned long)tally.old_sets,
-                  (unsigned long)tally.new_sets, (unsigned long)tally.defaults);
-    assert_true(tally.new_sets > 0);
+    printf("scenario %d: %lu power cuts: old set %lu, new set %lu, defaults %lu\n",
+           scenario, (unsigned long)tally.cuts, (unsigned long)tally.old_sets,
+           (unsigned long)tally.new_sets, (unsigned long)tally.defaults);
+    TEST_ASSERT_GREATER_THAN(0, tally.new_sets);
     if (scenario == 0) {
-        assert_true(tally.defaults > 0);
-        assert_int_equal(tally.old_sets, 0);
+        TEST_ASSERT_GREATER_THAN(0, tally.defaults);
+        TEST_ASSERT_EQUAL_INT(0, tally.old_sets);
     } else {
-        assert_true(tally.old_sets > 0);
-        assert_int_equal(tally.defaults, 0);
+        TEST_ASSERT_GREATER_THAN(0, tally.old_sets);
+        TEST_ASSERT_EQUAL_INT(0, tally.defaults);
     }
 }
 
-static void test_power_cut_nothing_saved_before(void **state)
+static void test_power_cut_nothing_saved_before(void)
 {
-    (void)state;
     sweep(0);
 }
 
-static void test_power_cut_one_record(void **state)
+static void test_power_cut_one_record(void)
 {
-    (void)state;
     sweep(1);
 }
 
-static void test_power_cut_two_records(void **state)
+static void test_power_cut_two_records(void)
 {
-    (void)state;
     sweep(2);
 }
 
 /* SAVE refused while the output is active: no NVM operation at all. */
-static void test_save_refused_active(void **state)
+static void test_save_refused_active(void)
 {
-    (void)state;
     to_armed(0);
     set_f32(PMA_PARAM_PPC_C, 3.0f);
     const uint32_t ops = pma_fake_nvm_op_count();
     assert_status(whole_op(PMA_PARAM_OP_SAVE), PMA_ERR_STATE);
     command_ok(PMA_CMD_START, 0, PMA_OK);
     assert_status(whole_op(PMA_PARAM_OP_SAVE), PMA_ERR_STATE);
-    assert_int_equal(pma_fake_nvm_op_count(), ops);
-    assert_int_equal(app.params_changed, 1);
-    assert_int_equal(app.save_failed, 0);
+    TEST_ASSERT_EQUAL_INT(ops, pma_fake_nvm_op_count());
+    TEST_ASSERT_EQUAL_INT(1, app.params_changed);
+    TEST_ASSERT_EQUAL_INT(0, app.save_failed);
     command_ok(PMA_CMD_DISARM, 0, PMA_OK);
     save_ok();
-    assert_true(pma_fake_nvm_op_count() > ops);
+    TEST_ASSERT_GREATER_THAN(ops, pma_fake_nvm_op_count());
 }
 
 /* Whole-set ops with storage: LOAD with nothing saved, SAVE, LOAD,
  * RESTORE_DEFAULTS (RAM only); SAVE allowed in FAULT. */
-static void test_whole_set_ops(void **state)
+static void test_whole_set_ops(void)
 {
-    (void)state;
     defaults = default_crc();
     to_idle(0);
     assert_status(whole_op(PMA_PARAM_OP_LOAD), PMA_ERR_NO_RECORD); /* nothing saved yet */
-    assert_true(params_are(&defaults));
+    TEST_ASSERT_TRUE(params_are(&defaults));
     set_f32(PMA_PARAM_PPC_C, 7.0f);
     set_u32(PMA_PARAM_TELEM_MASK, 1);
     save_ok();
     set_f32(PMA_PARAM_PPC_C, 9.0f);
     set_i32(PMA_PARAM_ACT_POLARITY, -1);
     assert_status(whole_op(PMA_PARAM_OP_LOAD), PMA_OK);
-    assert_true(app.params.ppc_c == 7.0f);
-    assert_int_equal(app.params.telem_mask, 1);
-    assert_int_equal(app.params.act_polarity, 1);
+    TEST_ASSERT_TRUE(app.params.ppc_c == 7.0f);
+    TEST_ASSERT_EQUAL_INT(1, app.params.telem_mask);
+    TEST_ASSERT_EQUAL_INT(1, app.params.act_polarity);
     assert_status(whole_op(PMA_PARAM_OP_RESTORE_DEFAULTS), PMA_OK);
-    assert_true(params_are(&defaults));
+    TEST_ASSERT_TRUE(params_are(&defaults));
     assert_status(whole_op(PMA_PARAM_OP_LOAD), PMA_OK);
-    assert_true(app.params.ppc_c == 7.0f);
+    TEST_ASSERT_TRUE(app.params.ppc_c == 7.0f);
     /* in FAULT (output safe) SAVE works */
     command_ok(PMA_CMD_ESTOP, 0, PMA_OK);
     set_f32(PMA_PARAM_PPC_C, 8.0f);
     save_ok();
     pma_fake_reboot();
     assert_status(restart_app(), PMA_OK);
-    assert_true(app.params.ppc_c == 8.0f);
+    TEST_ASSERT_TRUE(app.params.ppc_c == 8.0f);
 }
 
 /* LOAD brings back the stored set, clears PARAMS_CHANGED; refused while ARMED. */
-static void test_load_restores_saved_set(void **state)
+static void test_load_restores_saved_set(void)
 {
-    (void)state;
     to_idle(0);
     apply_a(&set_a);
     save_ok();
     apply_b(&set_b);
-    assert_int_equal(app.params_changed, 1);
+    TEST_ASSERT_EQUAL_INT(1, app.params_changed);
     assert_status(whole_op(PMA_PARAM_OP_LOAD), PMA_OK);
-    assert_true(params_are(&set_a));
-    assert_int_equal(app.params_changed, 0);
-    assert_int_equal(app.params_default, 0);
+    TEST_ASSERT_TRUE(params_are(&set_a));
+    TEST_ASSERT_EQUAL_INT(0, app.params_changed);
+    TEST_ASSERT_EQUAL_INT(0, app.params_default);
     /* the loaded timing: heartbeat every 200 ms */
     (void)next_heartbeat();
     const uint64_t t0 = pma_hal_time_us();
     (void)next_heartbeat();
-    assert_int_equal(pma_hal_time_us() - t0, 200000u);
+    TEST_ASSERT_EQUAL_INT(200000u, pma_hal_time_us() - t0);
     /* refused while ARMED: nothing changes */
     apply_b(&set_b);
     command_ok(PMA_CMD_ARM, 0, PMA_OK);
     assert_status(whole_op(PMA_PARAM_OP_LOAD), PMA_ERR_STATE);
-    assert_true(params_are(&set_b));
+    TEST_ASSERT_TRUE(params_are(&set_b));
     /* a storage read failure: the set in RAM stays */
     command_ok(PMA_CMD_DISARM, 0, PMA_OK);
     pma_fake_nvm_cut_power(0, 0);
     set_f32(PMA_PARAM_PPC_C, 1.0f); /* no NVM op */
     const uint32_t now = params_crc(&app.params);
     assert_status(pma_hal_nvm_erase(0), PMA_ERR_IO); /* the cut: the NVM is gone */
-    assert_true(whole_op(PMA_PARAM_OP_LOAD) < 0);
-    assert_true(params_are(&now));
+    TEST_ASSERT_LESS_THAN(0, whole_op(PMA_PARAM_OP_LOAD));
+    TEST_ASSERT_TRUE(params_are(&now));
 }
 
 /* The heartbeat's storage flags. */
-static void test_heartbeat_storage_flags(void **state)
+static void test_heartbeat_storage_flags(void)
 {
-    (void)state;
     to_idle(0);
     struct pma_proto_heartbeat_t h = next_heartbeat();
-    assert_int_equal(h.flags & (PMA_HB_PARAMS_DEFAULT | PMA_HB_PARAMS_CHANGED | PMA_HB_SAVE_FAILED),
-                     PMA_HB_PARAMS_DEFAULT);
+    TEST_ASSERT_EQUAL_HEX16(PMA_HB_PARAMS_DEFAULT,
+                            h.flags & (PMA_HB_PARAMS_DEFAULT | PMA_HB_PARAMS_CHANGED |
+                                       PMA_HB_SAVE_FAILED));
     set_f32(PMA_PARAM_PPC_C, 3.0f);
     h = next_heartbeat();
-    assert_true(h.flags & PMA_HB_PARAMS_CHANGED);
+    TEST_ASSERT_TRUE(h.flags & PMA_HB_PARAMS_CHANGED);
     save_ok();
     h = next_heartbeat();
-    assert_false(h.flags & PMA_HB_PARAMS_CHANGED);
-    assert_true(h.flags & PMA_HB_PARAMS_DEFAULT); /* storage held no record at start-up */
+    TEST_ASSERT_FALSE(h.flags & PMA_HB_PARAMS_CHANGED);
+    TEST_ASSERT_TRUE(h.flags & PMA_HB_PARAMS_DEFAULT); /* storage held no record at start-up */
     /* a SELECT_* command changes a parameter too */
     command_ok(PMA_CMD_SELECT_REFERENCE, PMA_REF_KIND_SINE, PMA_OK);
     h = next_heartbeat();
-    assert_true(h.flags & PMA_HB_PARAMS_CHANGED);
+    TEST_ASSERT_TRUE(h.flags & PMA_HB_PARAMS_CHANGED);
     /* a worn flash byte in slot B, where this SAVE goes (A holds the newest):
      * the read-back fails, SAVE_FAILED */
     pma_fake_nvm_stuck_byte(T_FIRST + T_BPS + 1u, 4, true); /* record byte 20 */
     assert_status(whole_op(PMA_PARAM_OP_SAVE), PMA_ERR_VERIFY);
     h = next_heartbeat();
-    assert_true(h.flags & PMA_HB_SAVE_FAILED);
-    assert_true(h.flags & PMA_HB_PARAMS_CHANGED);
+    TEST_ASSERT_TRUE(h.flags & PMA_HB_SAVE_FAILED);
+    TEST_ASSERT_TRUE(h.flags & PMA_HB_PARAMS_CHANGED);
     /* the previous record is still the one that loads */
     assert_status(whole_op(PMA_PARAM_OP_LOAD), PMA_OK);
-    assert_int_equal(app.params.ref_kind, PMA_REF_KIND_HOLD);
+    TEST_ASSERT_EQUAL_INT(PMA_REF_KIND_HOLD, app.params.ref_kind);
     /* repaired: the next SAVE clears it */
     pma_fake_nvm_stuck_byte(T_FIRST + T_BPS + 1u, 4, false);
     command_ok(PMA_CMD_SELECT_REFERENCE, PMA_REF_KIND_SINE, PMA_OK);
     save_ok();
     h = next_heartbeat();
-    assert_false(h.flags & (PMA_HB_SAVE_FAILED | PMA_HB_PARAMS_CHANGED));
+    TEST_ASSERT_FALSE(h.flags & (PMA_HB_SAVE_FAILED | PMA_HB_PARAMS_CHANGED));
     /* restarted on the stored set: PARAMS_DEFAULT is gone */
     pma_fake_reboot();
     assert_status(restart_app(), PMA_OK);
     h = last_heartbeat();
-    assert_false(h.flags & (PMA_HB_PARAMS_DEFAULT | PMA_HB_PARAMS_CHANGED | PMA_HB_SAVE_FAILED));
-    assert_int_equal(app.params.ref_kind, PMA_REF_KIND_SINE);
+    TEST_ASSERT_FALSE(h.flags &
+                      (PMA_HB_PARAMS_DEFAULT | PMA_HB_PARAMS_CHANGED | PMA_HB_SAVE_FAILED));
+    TEST_ASSERT_EQUAL_INT(PMA_REF_KIND_SINE, app.params.ref_kind);
     /* RESTORE_DEFAULTS: changed (the RAM set differs from the stored one) */
     assert_status(whole_op(PMA_PARAM_OP_RESTORE_DEFAULTS), PMA_OK);
     h = next_heartbeat();
-    assert_true(h.flags & PMA_HB_PARAMS_CHANGED);
+    TEST_ASSERT_TRUE(h.flags & PMA_HB_PARAMS_CHANGED);
 }
 
 /* Records written with pstore directly, as another firmware or a damaged
@@ -404,7 +398,7 @@ static void store_blob(const pma_params_t *p, size_t len, uint16_t version, size
                        uint32_t patch_raw)
 {
     uint8_t blob[PMA_PARAMS_BLOB_BYTES];
-    assert_int_equal(pma_params_serialize(p, blob, sizeof blob), PMA_PARAMS_BLOB_BYTES);
+    TEST_ASSERT_EQUAL_INT(PMA_PARAMS_BLOB_BYTES, pma_params_serialize(p, blob, sizeof blob));
     if (patch_entry < PMA_PARAM_COUNT) {
         uint8_t *e = blob + patch_entry * PMA_PARAMS_ENTRY_BYTES;
         for (unsigned b = 0; b < 4u; ++b) e[2u + b] = (uint8_t)(patch_raw >> (8u * b));
@@ -413,9 +407,8 @@ static void store_blob(const pma_params_t *p, size_t len, uint16_t version, size
     assert_status(pma_pstore_save(&ps, blob, len, version), PMA_OK);
 }
 
-static void test_stored_records_checked(void **state)
+static void test_stored_records_checked(void)
 {
-    (void)state;
     defaults = default_crc();
     start_with(0, -1.5f);
     pma_params_t p;
@@ -426,34 +419,33 @@ static void test_stored_records_checked(void **state)
     store_blob(&p, PMA_PARAMS_BLOB_BYTES, PMA_PARAMS_BLOB_VERSION, 1 /* sys.tick_hz */, 10u);
     pma_fake_reboot();
     assert_status(restart_app(), PMA_OK);
-    assert_true(app.params.ppc_c == 5.0f);
-    assert_int_equal(app.params.telem_mask, 7u);
-    assert_int_equal(app.params.sys_tick_hz, 1000u);
-    assert_int_equal(app.params_default, 0);
+    TEST_ASSERT_TRUE(app.params.ppc_c == 5.0f);
+    TEST_ASSERT_EQUAL_INT(7u, app.params.telem_mask);
+    TEST_ASSERT_EQUAL_INT(1000u, app.params.sys_tick_hz);
+    TEST_ASSERT_EQUAL_INT(0, app.params_default);
     /* fewer entries (an older firmware's set): the rest are defaults */
     store_blob(&p, 10u * PMA_PARAMS_ENTRY_BYTES, PMA_PARAMS_BLOB_VERSION, PMA_PARAM_COUNT, 0);
     pma_fake_reboot();
     assert_status(restart_app(), PMA_OK);
-    assert_true(app.params.ppc_c == 2.0f);      /* entry 10 and later: defaults */
-    assert_int_equal(app.params.telem_mask, 7u); /* entry 4 */
+    TEST_ASSERT_TRUE(app.params.ppc_c == 2.0f);      /* entry 10 and later: defaults */
+    TEST_ASSERT_EQUAL_INT(7u, app.params.telem_mask); /* entry 4 */
     /* another blob version: not loaded */
     store_blob(&p, PMA_PARAMS_BLOB_BYTES, PMA_PARAMS_BLOB_VERSION + 1u, PMA_PARAM_COUNT, 0);
     pma_fake_reboot();
     assert_status(restart_app(), PMA_OK);
-    assert_true(params_are(&defaults));
-    assert_true(last_heartbeat().flags & PMA_HB_PARAMS_DEFAULT);
+    TEST_ASSERT_TRUE(params_are(&defaults));
+    TEST_ASSERT_TRUE(last_heartbeat().flags & PMA_HB_PARAMS_DEFAULT);
     /* a length that is no whole number of entries: defaults */
     store_blob(&p, PMA_PARAMS_BLOB_BYTES - 1u, PMA_PARAMS_BLOB_VERSION, PMA_PARAM_COUNT, 0);
     pma_fake_reboot();
     assert_status(restart_app(), PMA_OK);
-    assert_true(params_are(&defaults));
-    assert_true(last_heartbeat().flags & PMA_HB_PARAMS_DEFAULT);
+    TEST_ASSERT_TRUE(params_are(&defaults));
+    TEST_ASSERT_TRUE(last_heartbeat().flags & PMA_HB_PARAMS_DEFAULT);
 }
 
 /* A damaged newest record: the older one loads; both damaged: defaults. */
-static void test_corrupt_record_falls_back(void **state)
+static void test_corrupt_record_falls_back(void)
 {
-    (void)state;
     defaults = default_crc();
     to_idle(0);
     apply_a(&set_a);
@@ -462,40 +454,39 @@ static void test_corrupt_record_falls_back(void **state)
     save_ok(); /* slot B, newest */
     pma_fake_reboot();
     assert_status(restart_app(), PMA_OK);
-    assert_true(params_are(&set_b));
+    TEST_ASSERT_TRUE(params_are(&set_b));
     nvm_mem[(T_FIRST + T_BPS) * T_BLOCK + 40u] ^= 0x01u; /* a bit of B's blob */
     pma_fake_reboot();
     assert_status(restart_app(), PMA_OK);
-    assert_true(params_are(&set_a));
-    assert_false(last_heartbeat().flags & PMA_HB_PARAMS_DEFAULT);
+    TEST_ASSERT_TRUE(params_are(&set_a));
+    TEST_ASSERT_FALSE(last_heartbeat().flags & PMA_HB_PARAMS_DEFAULT);
     nvm_mem[T_FIRST * T_BLOCK + 100u] ^= 0x80u;
     pma_fake_reboot();
     assert_status(restart_app(), PMA_OK);
-    assert_true(params_are(&defaults));
-    assert_true(last_heartbeat().flags & PMA_HB_PARAMS_DEFAULT);
+    TEST_ASSERT_TRUE(params_are(&defaults));
+    TEST_ASSERT_TRUE(last_heartbeat().flags & PMA_HB_PARAMS_DEFAULT);
     /* and a SAVE repairs it */
     step();
     apply_a(&set_a);
     save_ok();
     pma_fake_reboot();
     assert_status(restart_app(), PMA_OK);
-    assert_true(params_are(&set_a));
+    TEST_ASSERT_TRUE(params_are(&set_a));
 }
 
 int main(void)
 {
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_save_then_restart_loads),
-        cmocka_unit_test(test_saved_node_id),
-        cmocka_unit_test(test_power_cut_nothing_saved_before),
-        cmocka_unit_test(test_power_cut_one_record),
-        cmocka_unit_test(test_power_cut_two_records),
-        cmocka_unit_test(test_save_refused_active),
-        cmocka_unit_test(test_whole_set_ops),
-        cmocka_unit_test(test_load_restores_saved_set),
-        cmocka_unit_test(test_heartbeat_storage_flags),
-        cmocka_unit_test(test_stored_records_checked),
-        cmocka_unit_test(test_corrupt_record_falls_back),
-    };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    UNITY_BEGIN();
+    RUN_TEST(test_save_then_restart_loads);
+    RUN_TEST(test_saved_node_id);
+    RUN_TEST(test_power_cut_nothing_saved_before);
+    RUN_TEST(test_power_cut_one_record);
+    RUN_TEST(test_power_cut_two_records);
+    RUN_TEST(test_save_refused_active);
+    RUN_TEST(test_whole_set_ops);
+    RUN_TEST(test_load_restores_saved_set);
+    RUN_TEST(test_heartbeat_storage_flags);
+    RUN_TEST(test_stored_records_checked);
+    RUN_TEST(test_corrupt_record_falls_back);
+    return UNITY_END();
 }

@@ -15,10 +15,10 @@
 static pma_supervisor_limits_t lim;
 static pma_supervisor_input_t in;
 
-/* Defaults of params.toml at 1 kHz; a RUNNING tick with nothing wrong. */
-static int setup_supervisor(void **state)
+/* Defaults of params.toml at 1 kHz; a RUNNING tick with nothing wrong. The fixture of the
+ * supervisor tests: each calls it first. */
+static void setup_supervisor(void)
 {
-    (void)state;
     lim = (pma_supervisor_limits_t){
         .x_min_cm = -3.0f, .x_max_cm = 0.0f, .x_margin_cm = 0.5f, .sensor_timeout_ticks = 10,
         .max_late_ticks = 2, .host_timeout_ticks = 500, .barrier_ticks = 100,
@@ -28,14 +28,13 @@ static int setup_supervisor(void **state)
         .x_cm = -1.5f, .ticks_since_sample = 0, .late_ticks = 0,
         .ticks_since_host_heartbeat = 0, .controller_error = 0, .u = 12.5f, .barrier_run = 0,
     };
-    return 0;
 }
 
 #define check(want) assert_fault(pma_supervisor_check(&lim, &in), (want))
 
-static void test_supervisor_nothing_wrong(void **state)
+static void test_supervisor_nothing_wrong(void)
 {
-    (void)state;
+    setup_supervisor();
     check(PMA_FAULT_NONE);
     in.running = 0;
     check(PMA_FAULT_NONE);
@@ -43,9 +42,9 @@ static void test_supervisor_nothing_wrong(void **state)
     assert_fault(pma_supervisor_check(&lim, NULL), PMA_FAULT_CONTROLLER);
 }
 
-static void test_supervisor_each_condition(void **state)
+static void test_supervisor_each_condition(void)
 {
-    (void)state;
+    setup_supervisor();
     pma_supervisor_input_t good = in;
 
     in.bus_off = 1;
@@ -125,9 +124,9 @@ static void test_supervisor_each_condition(void **state)
     check(PMA_FAULT_NONE);
 }
 
-static void test_supervisor_nan_position_trips(void **state)
+static void test_supervisor_nan_position_trips(void)
 {
-    (void)state;
+    setup_supervisor();
     in.x_cm = NAN;
     check(PMA_FAULT_POSITION_LIMIT);
     in.x_cm = -NAN;
@@ -142,9 +141,9 @@ static void test_supervisor_nan_position_trips(void **state)
 }
 
 /* Inactive output (IDLE, FAULT, BOOT): only bus-off. */
-static void test_supervisor_inactive_only_bus_off(void **state)
+static void test_supervisor_inactive_only_bus_off(void)
 {
-    (void)state;
+    setup_supervisor();
     in.output_active = 0;
     in.running = 0;
     in.sensor_status = PMA_ERR_WIRE_BREAK;
@@ -161,9 +160,9 @@ static void test_supervisor_inactive_only_bus_off(void **state)
 }
 
 /* ARMED: sensor, position and overrun checks, but not the RUNNING ones. */
-static void test_supervisor_armed_skips_running_checks(void **state)
+static void test_supervisor_armed_skips_running_checks(void)
 {
-    (void)state;
+    setup_supervisor();
     in.running = 0;
     in.ticks_since_host_heartbeat = UINT32_MAX;
     in.controller_error = 1;
@@ -183,9 +182,9 @@ static void test_supervisor_armed_skips_running_checks(void **state)
  * position, tick overrun; then while RUNNING: host heartbeat, controller
  * error, non-finite output, barrier. Everything wrong at once, then the
  * winner removed one by one. */
-static void test_supervisor_priority(void **state)
+static void test_supervisor_priority(void)
 {
-    (void)state;
+    setup_supervisor();
     in.bus_off = 1;
     in.ticks_since_sample = 10;
     in.sensor_status = PMA_ERR_WIRE_BREAK;
@@ -224,39 +223,38 @@ static void test_supervisor_priority(void **state)
     check(PMA_FAULT_NONE);
 }
 
-static void test_fault_names(void **state)
+static void test_fault_names(void)
 {
-    (void)state;
-    assert_string_equal(pma_fault_name(PMA_FAULT_NONE), "NONE");
-    assert_string_equal(pma_fault_name(PMA_FAULT_SENSOR_WIRE_BREAK), "SENSOR_WIRE_BREAK");
-    assert_string_equal(pma_fault_name(PMA_FAULT_OUTPUT), "OUTPUT");
-    assert_string_equal(pma_fault_name(PMA_FAULT_INIT), "INIT");
-    assert_string_equal(pma_fault_name(PMA_FAULT_INIT + 1), "UNKNOWN");
-    assert_string_equal(pma_fault_name(-1), "UNKNOWN");
+    TEST_ASSERT_EQUAL_STRING("NONE", pma_fault_name(PMA_FAULT_NONE));
+    TEST_ASSERT_EQUAL_STRING("SENSOR_WIRE_BREAK", pma_fault_name(PMA_FAULT_SENSOR_WIRE_BREAK));
+    TEST_ASSERT_EQUAL_STRING("OUTPUT", pma_fault_name(PMA_FAULT_OUTPUT));
+    TEST_ASSERT_EQUAL_STRING("INIT", pma_fault_name(PMA_FAULT_INIT));
+    TEST_ASSERT_EQUAL_STRING("UNKNOWN", pma_fault_name(PMA_FAULT_INIT + 1));
+    TEST_ASSERT_EQUAL_STRING("UNKNOWN", pma_fault_name(-1));
     /* the names are the DBC's FaultCode values */
-    assert_int_equal(PMA_FAULT_WATCHDOG_RESET, PMA_PROTO_HEARTBEAT_FAULT_CODE_WATCHDOG_RESET_CHOICE);
-    assert_int_equal(PMA_FAULT_OUTPUT, PMA_PROTO_HEARTBEAT_FAULT_CODE_OUTPUT_CHOICE);
-    assert_int_equal(PMA_FAULT_INIT, PMA_PROTO_HEARTBEAT_FAULT_CODE_INIT_CHOICE);
-    assert_int_equal(PMA_FAULT_BARRIER, PMA_PROTO_HEARTBEAT_FAULT_CODE_BARRIER_CHOICE);
+    TEST_ASSERT_EQUAL_INT(PMA_PROTO_HEARTBEAT_FAULT_CODE_WATCHDOG_RESET_CHOICE,
+                          PMA_FAULT_WATCHDOG_RESET);
+    TEST_ASSERT_EQUAL_INT(PMA_PROTO_HEARTBEAT_FAULT_CODE_OUTPUT_CHOICE, PMA_FAULT_OUTPUT);
+    TEST_ASSERT_EQUAL_INT(PMA_PROTO_HEARTBEAT_FAULT_CODE_INIT_CHOICE, PMA_FAULT_INIT);
+    TEST_ASSERT_EQUAL_INT(PMA_PROTO_HEARTBEAT_FAULT_CODE_BARRIER_CHOICE, PMA_FAULT_BARRIER);
 }
 
 /* -------------------------------------------------------------- actuator -- */
 
 static pma_actuator_config_t ac;
 
-static int setup_actuator(void **state)
+/* The fixture of the actuator tests: each calls it first. */
+static void setup_actuator(void)
 {
-    (void)state;
     ac = (pma_actuator_config_t){
         .p0_kpa = 300.0f, .kpa_per_u = 1.0f, .polarity = 1, .p_min_kpa = 0.0f,
         .p_max_kpa = 600.0f, .slew_kpa_s = 0.0f, .safe_mode = PMA_SAFE_VENT, .safe_kpa = 0.0f,
     };
-    return 0;
 }
 
-static void test_actuator_validate(void **state)
+static void test_actuator_validate(void)
 {
-    (void)state;
+    setup_actuator();
     const pma_actuator_config_t good = ac;
     assert_status(pma_actuator_validate(&ac), PMA_OK);
     assert_status(pma_actuator_validate(NULL), PMA_ERR_NULL);
@@ -311,9 +309,9 @@ static void test_actuator_validate(void **state)
     }
 }
 
-static void test_actuator_law_clamp_polarity(void **state)
+static void test_actuator_law_clamp_polarity(void)
 {
-    (void)state;
+    setup_actuator();
     /* no slew limit: p = p0 + polarity * kpa_per_u * u, clamped */
     assert_near(pma_actuator_active_kpa(&ac, 0.0f, 0.0f, 1e-3f), 300.0f, 0.0f);
     assert_near(pma_actuator_active_kpa(&ac, 25.0f, 0.0f, 1e-3f), 325.0f, 1e-4);
@@ -333,9 +331,9 @@ static void test_actuator_law_clamp_polarity(void **state)
     assert_near(pma_actuator_active_kpa(&ac, -400.0f, 0.0f, 1e-3f), 500.0f, 0.0f);
 }
 
-static void test_actuator_slew_limit(void **state)
+static void test_actuator_slew_limit(void)
 {
-    (void)state;
+    setup_actuator();
     ac.slew_kpa_s = 20000.0f; /* 20 kPa per 1 ms tick */
     float p = 0.0f;
     /* from the vented state up to p0: 15 ticks of 20 kPa */
@@ -355,59 +353,58 @@ static void test_actuator_slew_limit(void **state)
     assert_near(pma_actuator_active_kpa(&ac, 300.0f, 0.0f, 1e-3f), 600.0f, 0.0f);
 }
 
-static void test_actuator_safe_modes(void **state)
+static void test_actuator_safe_modes(void)
 {
-    (void)state;
+    setup_actuator();
     ac.slew_kpa_s = 10.0f; /* the safe state ignores the slew limit */
     ac.safe_mode = PMA_SAFE_VENT;
-    assert_true(pma_actuator_safe_kpa(&ac, 450.0f) == 0.0f);
+    TEST_ASSERT_TRUE(pma_actuator_safe_kpa(&ac, 450.0f) == 0.0f);
     ac.safe_mode = PMA_SAFE_HOLD;
-    assert_true(pma_actuator_safe_kpa(&ac, 450.0f) == 450.0f);
-    assert_true(pma_actuator_safe_kpa(&ac, 0.0f) == 0.0f);
-    assert_true(pma_actuator_safe_kpa(&ac, NAN) == 0.0f);
-    assert_true(pma_actuator_safe_kpa(&ac, INFINITY) == 0.0f);
-    assert_true(pma_actuator_safe_kpa(&ac, -5.0f) == 0.0f);
+    TEST_ASSERT_TRUE(pma_actuator_safe_kpa(&ac, 450.0f) == 450.0f);
+    TEST_ASSERT_TRUE(pma_actuator_safe_kpa(&ac, 0.0f) == 0.0f);
+    TEST_ASSERT_TRUE(pma_actuator_safe_kpa(&ac, NAN) == 0.0f);
+    TEST_ASSERT_TRUE(pma_actuator_safe_kpa(&ac, INFINITY) == 0.0f);
+    TEST_ASSERT_TRUE(pma_actuator_safe_kpa(&ac, -5.0f) == 0.0f);
     ac.safe_mode = PMA_SAFE_FIXED;
     ac.safe_kpa = 120.0f;
-    assert_true(pma_actuator_safe_kpa(&ac, 450.0f) == 120.0f);
-    assert_true(pma_actuator_safe_kpa(&ac, NAN) == 120.0f);
+    TEST_ASSERT_TRUE(pma_actuator_safe_kpa(&ac, 450.0f) == 120.0f);
+    TEST_ASSERT_TRUE(pma_actuator_safe_kpa(&ac, NAN) == 120.0f);
 }
 
 /* Non-finite u or previous pressure: the safe pressure, never NaN. */
-static void test_actuator_non_finite(void **state)
+static void test_actuator_non_finite(void)
 {
-    (void)state;
+    setup_actuator();
     ac.slew_kpa_s = 20000.0f;
     const float bad[] = {NAN, INFINITY, -INFINITY};
     for (size_t i = 0; i < 3; ++i) {
         ac.safe_mode = PMA_SAFE_VENT;
-        assert_true(pma_actuator_active_kpa(&ac, bad[i], 300.0f, 1e-3f) == 0.0f);
-        assert_true(pma_actuator_active_kpa(&ac, 0.0f, bad[i], 1e-3f) == 0.0f);
+        TEST_ASSERT_TRUE(pma_actuator_active_kpa(&ac, bad[i], 300.0f, 1e-3f) == 0.0f);
+        TEST_ASSERT_TRUE(pma_actuator_active_kpa(&ac, 0.0f, bad[i], 1e-3f) == 0.0f);
         ac.safe_mode = PMA_SAFE_FIXED;
         ac.safe_kpa = 80.0f;
-        assert_true(pma_actuator_active_kpa(&ac, bad[i], 300.0f, 1e-3f) == 80.0f);
-        assert_true(pma_actuator_active_kpa(&ac, 0.0f, bad[i], 1e-3f) == 80.0f);
+        TEST_ASSERT_TRUE(pma_actuator_active_kpa(&ac, bad[i], 300.0f, 1e-3f) == 80.0f);
+        TEST_ASSERT_TRUE(pma_actuator_active_kpa(&ac, 0.0f, bad[i], 1e-3f) == 80.0f);
         ac.safe_mode = PMA_SAFE_HOLD;  /* no previous value to hold: vent */
-        assert_true(pma_actuator_active_kpa(&ac, 0.0f, bad[i], 1e-3f) == 0.0f);
+        TEST_ASSERT_TRUE(pma_actuator_active_kpa(&ac, 0.0f, bad[i], 1e-3f) == 0.0f);
         /* (HOLD with a non-finite u and a finite previous value: test_app_bugs.c) */
     }
 }
 
 int main(void)
 {
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test_setup(test_supervisor_nothing_wrong, setup_supervisor),
-        cmocka_unit_test_setup(test_supervisor_each_condition, setup_supervisor),
-        cmocka_unit_test_setup(test_supervisor_nan_position_trips, setup_supervisor),
-        cmocka_unit_test_setup(test_supervisor_inactive_only_bus_off, setup_supervisor),
-        cmocka_unit_test_setup(test_supervisor_armed_skips_running_checks, setup_supervisor),
-        cmocka_unit_test_setup(test_supervisor_priority, setup_supervisor),
-        cmocka_unit_test(test_fault_names),
-        cmocka_unit_test_setup(test_actuator_validate, setup_actuator),
-        cmocka_unit_test_setup(test_actuator_law_clamp_polarity, setup_actuator),
-        cmocka_unit_test_setup(test_actuator_slew_limit, setup_actuator),
-        cmocka_unit_test_setup(test_actuator_safe_modes, setup_actuator),
-        cmocka_unit_test_setup(test_actuator_non_finite, setup_actuator),
-    };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    UNITY_BEGIN();
+    RUN_TEST(test_supervisor_nothing_wrong);
+    RUN_TEST(test_supervisor_each_condition);
+    RUN_TEST(test_supervisor_nan_position_trips);
+    RUN_TEST(test_supervisor_inactive_only_bus_off);
+    RUN_TEST(test_supervisor_armed_skips_running_checks);
+    RUN_TEST(test_supervisor_priority);
+    RUN_TEST(test_fault_names);
+    RUN_TEST(test_actuator_validate);
+    RUN_TEST(test_actuator_law_clamp_polarity);
+    RUN_TEST(test_actuator_slew_limit);
+    RUN_TEST(test_actuator_safe_modes);
+    RUN_TEST(test_actuator_non_finite);
+    return UNITY_END();
 }
