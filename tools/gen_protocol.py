@@ -3,7 +3,8 @@
 sources of truth, and checks that the committed copies are up to date.
 
   firmware/protocol/pma_proto.dbc  -> firmware/protocol/generated/pma_proto.{c,h}
-                                      (cantools generate_c_source --use-round)
+                                      (cantools generate_c_source --use-round),
+                                      firmware/protocol/generated/pma_proto_version.h
   firmware/app/params.toml         -> firmware/app/generated/pma_param_table.{c,h}
                                       docs/parameters.md
 
@@ -22,6 +23,9 @@ import tempfile
 import tomllib
 from pathlib import Path
 from typing import Any
+
+import cantools
+from pmactl.protocol import param_table_hash, protocol_version
 
 ROOT = Path(__file__).resolve().parents[1]
 DBC = ROOT / "firmware/protocol/pma_proto.dbc"
@@ -112,7 +116,9 @@ def gen_param_header(params: list[dict[str, Any]]) -> str:
     for p in params:
         out.append(f"    PMA_PARAM_{p['field'].upper()} = {p['id']},\n")
     out.append("};\n\n")
-    out.append(f"#define PMA_PARAM_COUNT {len(params)}u\n\n")
+    out.append(f"#define PMA_PARAM_COUNT {len(params)}u\n")
+    out.append("/* CRC-32 of the table (pmactl.protocol.param_table_hash): DEVICE_INFO's ParamTableHash. */\n")
+    out.append(f"#define PMA_PARAM_TABLE_HASH 0x{param_table_hash(params):08X}u\n\n")
     for p in params:
         for k, v in sorted(p.get("values", {}).items()):
             out.append(f"#define PMA_{p['field'].upper()}_{v} {k}u\n")
@@ -202,9 +208,20 @@ def gen_codec() -> dict[str, str]:
         return files
 
 
+def gen_proto_version() -> str:
+    db = cantools.database.load_file(str(DBC))
+    assert isinstance(db, cantools.database.can.Database)
+    return (HEADER_NOTE.format(src="firmware/protocol/pma_proto.dbc")
+            + "#ifndef PMA_PROTO_VERSION_H\n#define PMA_PROTO_VERSION_H\n\n"
+            + "/* The protocol version: the number of the DBC's VERSION line (DEVICE_INFO's\n"
+            + " * ProtocolVersion). */\n"
+            + f"#define PMA_PROTO_VERSION {protocol_version(db)}u\n\n#endif /* PMA_PROTO_VERSION_H */\n")
+
+
 def outputs() -> dict[Path, str]:
     params = load_params()
     res = {PROTO_OUT / n: t for n, t in gen_codec().items()}
+    res[PROTO_OUT / "pma_proto_version.h"] = gen_proto_version()
     res[PARAM_OUT / "pma_param_table.h"] = gen_param_header(params)
     res[PARAM_OUT / "pma_param_table.c"] = gen_param_source(params)
     res[PARAM_DOC] = gen_param_doc(params)

@@ -195,12 +195,13 @@ int pma_app_init(pma_app_t *app, const pma_app_platform_t *plat)
     actuator_config(&app->params, &ac);
     app->p_kpa = pma_actuator_safe_kpa(&ac, 0.0f);
 
-    /* this node's ids, and the broadcast emergency stop */
-    const pma_can_filter_t filters[2] = {
+    /* this node's ids, and the broadcasts: emergency stop and device-info request */
+    const pma_can_filter_t filters[3] = {
         {.id = app->node_id, .mask = PMA_NODE_ID_MASK},
-        {.id = 0x000u, .mask = PMA_CAN_ID_MAX},
+        {.id = PMA_PROTO_ESTOP_ALL_FRAME_ID, .mask = PMA_CAN_ID_MAX},
+        {.id = PMA_PROTO_DEVICE_INFO_REQ_ALL_FRAME_ID, .mask = PMA_CAN_ID_MAX},
     };
-    int rc = pma_hal_can_set_filters(filters, 2u);
+    int rc = pma_hal_can_set_filters(filters, 3u);
     pma_app_send_heartbeat(app); /* the BOOT heartbeat: "I have (re)started" */
     if (rc == PMA_OK) rc = pma_app_apply_timing(app);
     app->next_heartbeat_us = pma_hal_time_us() + 1000u * (uint64_t)app->params.sys_heartbeat_ms;

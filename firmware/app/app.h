@@ -85,6 +85,9 @@ typedef enum pma_param_op {
 #define PMA_SAMPLE_GAP      2u
 #define PMA_SAMPLE_NONE     3u
 
+/* Bytes of the unique device id (DEVICE_INFO UidLow: bytes 0..6, UidHigh: 7..11). */
+#define PMA_DEVICE_UID_BYTES 12u
+
 /* Node addressing: frame id = base id + node id. */
 #define PMA_NODE_ID_MASK 0x00Fu
 #define PMA_BASE_ID_MASK 0x7F0u
@@ -105,6 +108,9 @@ typedef struct pma_app_platform {
     uint32_t store_first_block;    /* parameter storage: two slots of */
     uint32_t store_blocks_per_slot;/* this many NVM blocks; 0: no storage */
     uint32_t watchdog_ms;          /* 0: watchdog not started */
+    uint8_t device_uid[PMA_DEVICE_UID_BYTES]; /* the device's unique id (DEVICE_INFO pages 3-4):
+                                      the STM32's 96-bit UID; on the host from --uid or the
+                                      storage file; all zero: unknown */
 } pma_app_platform_t;
 
 typedef struct pma_app_counters {

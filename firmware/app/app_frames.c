@@ -6,8 +6,8 @@
  *   - ESTOP / ESTOP_ALL: obeyed whatever the data length (fail safe);
  *   - COMMAND, PARAM_REQ with the wrong length: answered with PMA_ERR_LENGTH,
  *     nothing changes;
- *   - PLANT_SENSOR, SETPOINT, HOST_HEARTBEAT with the wrong length: dropped
- *     (counted), as if never received;
+ *   - PLANT_SENSOR, SETPOINT, HOST_HEARTBEAT, DEVICE_INFO_REQ(_ALL) with the wrong
+ *     length: dropped (counted), as if never received;
  *   - out-of-range or malformed values: answered with the error (COMMAND,
  *     PARAM_REQ) or dropped (SETPOINT), nothing changes. */
 #include <math.h>
@@ -32,6 +32,11 @@ static int send(pma_app_t *app, uint16_t base_id, uint8_t dlc, const uint8_t *da
 static int8_t result_code(int rc)
 {
     return (int8_t)(rc < -128 ? -128 : (rc > 0 ? 0 : rc));
+}
+
+int pma_app_send_frame(pma_app_t *app, uint16_t base_id, uint8_t dlc, const uint8_t *data)
+{
+    return send(app, base_id, dlc, data);
 }
 
 /* ------------------------------------------------------------------ replies -- */
@@ -167,6 +172,17 @@ static void on_plant_sensor(pma_app_t *app, const pma_can_frame_t *f)
     app->bridge_new = 1;
     app->bridge_seq = m.seq;
     app->bridge_raw = m.raw_counts;
+}
+
+/* DEVICE_INFO_REQ(_ALL): no data; another length is dropped (counted), as for the other
+ * messages that are not answered with a result code. */
+static void on_device_info_req(pma_app_t *app, const pma_can_frame_t *f)
+{
+    if (f->dlc != PMA_PROTO_DEVICE_INFO_REQ_LENGTH) {
+        ++app->counters.frames_bad;
+        return;
+    }
+    pma_app_send_device_info(app);
 }
 
 static void on_command(pma_app_t *app, const pma_can_frame_t *f)
@@ -314,6 +330,10 @@ void pma_app_handle_frame(pma_app_t *app, const pma_can_frame_t *f)
         ++app->counters.frames_bad;
         return;
     }
+    if (f->id == PMA_PROTO_DEVICE_INFO_REQ_ALL_FRAME_ID) { /* the one broadcast request */
+        on_device_info_req(app, f);
+        return;
+    }
     if ((f->id & PMA_NODE_ID_MASK) != app->node_id) {
         ++app->counters.frames_ignored;
         return;
@@ -330,6 +350,9 @@ void pma_app_handle_frame(pma_app_t *app, const pma_can_frame_t *f)
         break;
     case PMA_PROTO_PARAM_REQ_FRAME_ID:
         on_param_req(app, f);
+        break;
+    case PMA_PROTO_DEVICE_INFO_REQ_FRAME_ID:
+        on_device_info_req(app, f);
         break;
     case PMA_PROTO_HOST_HEARTBEAT_FRAME_ID:
         if (f->dlc == PMA_PROTO_HOST_HEARTBEAT_LENGTH) {

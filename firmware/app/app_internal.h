@@ -12,7 +12,12 @@ int pma_app_check_param_groups(const pma_params_t *p);
 void pma_app_sync_bridge(pma_app_t *app);
 
 void pma_app_send_heartbeat(pma_app_t *app);
+/* Sends DEVICE_INFO pages 0..4 (app_identity.c): the reply to DEVICE_INFO_REQ and
+ * DEVICE_INFO_REQ_ALL. */
+void pma_app_send_device_info(pma_app_t *app);
 void pma_app_send_telemetry(pma_app_t *app);
 int pma_app_send_actuator(pma_app_t *app);
+/* Queues one of this node's frames (id = base_id + node id); counts one the HAL refuses. */
+int pma_app_send_frame(pma_app_t *app, uint16_t base_id, uint8_t dlc, const uint8_t *data);
 
 #endif /* PMA_APP_INTERNAL_H */

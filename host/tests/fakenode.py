@@ -17,7 +17,7 @@ from typing import Any, Callable
 
 import can
 
-from pmactl.protocol import Param, load_protocol, to_f32
+from pmactl.protocol import Param, load_protocol, param_table_hash, protocol_version, to_f32
 
 PROTO = load_protocol()
 STATE = {v: k for k, v in PROTO.state_names.items()}
@@ -74,6 +74,9 @@ class FakeNode:
     wire_break_at_tick: int | None = None   # RUNNING: fault SENSOR_WIRE_BREAK after this many ticks
     overrides: dict[str, dict[str, Any]] = field(default_factory=dict)  # name -> {"max": ...}
     params: tuple[str, ...] = DEFAULT_PARAMS
+    uid: bytes = bytes(range(1, 13))  # the 12-byte unique id DEVICE_INFO reports
+    info_protocol_version: int | None = None  # DEVICE_INFO's ProtocolVersion (None: the DBC's)
+    info_length: int = 8                      # DLC of the DEVICE_INFO frames it sends
 
     def __post_init__(self) -> None:
         self.rows: dict[int, Row] = {}
@@ -219,6 +222,11 @@ class FakeNode:
             self.received.append((name, {}))
             self._fault("ESTOP")
             return
+        if self.answer and not msg.data and (
+                name == "DEVICE_INFO_REQ_ALL" or (name == "DEVICE_INFO_REQ" and node == self.node)):
+            self.received.append((name, {}))
+            self._device_info()
+            return
         if node != self.node:
             return
         try:
@@ -238,6 +246,25 @@ class FakeNode:
                                        "State": self.state})
         elif name == "PARAM_REQ" and self.answer:
             self._param(sig)
+
+    def _device_info(self) -> None:
+        version = (protocol_version(PROTO.db) if self.info_protocol_version is None
+                   else self.info_protocol_version)
+        table = param_table_hash({"id": p.id, "name": p.name, "type": p.type, "min": p.min,
+                                  "max": p.max, "default": p.default} for p in PROTO.params)
+        pages: list[dict[str, Any]] = [
+            {"Page": 0, "ProtocolVersion": version, "FwMajor": 0, "FwMinor": 2, "FwPatch": 0,
+             "BuildTarget": 1, "BuildFlags": 0, "ParamCount": len(PROTO.params)},
+            {"Page": 1, "FwCommit": 0x1234ABCD},
+            {"Page": 2, "ParamTableHash": table},
+            {"Page": 3, "UidLow": int.from_bytes(self.uid[:7], "little")},
+            {"Page": 4, "UidHigh": int.from_bytes(self.uid[7:], "little")},
+        ]
+        fid = PROTO.frame_id("DEVICE_INFO", self.node)
+        for page in pages:
+            data = PROTO.encode("DEVICE_INFO", page)
+            data = (data + bytes(8))[: self.info_length]
+            self.bus.send(can.Message(arbitration_id=fid, data=data, is_extended_id=False))
 
     def _fault(self, fault: str) -> None:
         if self.state != STATE["FAULT"]:

@@ -111,8 +111,10 @@ static void start_node(uint8_t bridge, float x_cm)
     pma_fake_adc_set(counts_at(x_cm));
     led_writes = 0;
     led_level = -1;
-    assert_status(board_start(&board, &app, NULL), PMA_OK);
+    static const uint8_t board_uid[PMA_DEVICE_UID_BYTES] = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12};
+    assert_status(board_start(&board, &app, NULL, board_uid), PMA_OK);
     plat = app.plat; /* the board's platform, for the harness's helpers */
+    TEST_ASSERT_EQUAL_MEMORY(board_uid, plat.device_uid, PMA_DEVICE_UID_BYTES);
     TEST_ASSERT_EQUAL_INT(0, plat.plant_bridge); /* never forced on a board */
     TEST_ASSERT_EQUAL_INT(BOARD_STORE_BLOCKS_PER_SLOT, plat.store_blocks_per_slot);
     TEST_ASSERT_EQUAL_INT(BOARD_WATCHDOG_MS, plat.watchdog_ms);

@@ -39,6 +39,7 @@ static uint32_t r_mram[G4_MRAM_SIZE / 4u];
 static IWDG_TypeDef r_iwdg;
 static NVIC_Type r_nvic;
 static uint32_t nvm_mem[G4_NVM_BYTES / 4u];
+static uint8_t r_uid[PMA_HAL_STM32G474_UID_BYTES]; /* UID_BASE */
 
 /* broken devices and injected errors */
 static int hse_broken, pll_broken, flash_stuck_busy, iwdg_stuck, adc_broken;
@@ -65,6 +66,7 @@ static void fake_reset(void)
     memset(&r_iwdg, 0, sizeof r_iwdg);
     memset(&r_nvic, 0, sizeof r_nvic);
     memset(nvm_mem, 0xFF, sizeof nvm_mem);
+    for (unsigned k = 0; k < sizeof r_uid; ++k) r_uid[k] = (uint8_t)(0x30u + 7u * k);
     /* reset values that matter (RM0440) */
     r_rcc.CR = RCC_CR_HSION | RCC_CR_HSIRDY;
     r_rcc.CFGR = 0x5u;                   /* SW = SWS = HSI16 */
@@ -85,7 +87,7 @@ static void fake_reset(void)
         .rcc = &r_rcc, .pwr = &r_pwr, .flash = &r_flash, .gpioa = &r_gpioa, .gpiob = &r_gpiob,
         .tim2 = &r_tim2, .tim6 = &r_tim6, .adc1 = &r_adc1, .adc12_common = &r_adc12c,
         .dac1 = &r_dac1, .fdcan1 = &r_fdcan1, .fdcan_config = &r_fdcan_cfg, .mram = r_mram,
-        .iwdg = &r_iwdg, .nvic = &r_nvic, .nvm = (uintptr_t)nvm_mem,
+        .iwdg = &r_iwdg, .nvic = &r_nvic, .nvm = (uintptr_t)nvm_mem, .uid = r_uid,
     };
 }
 
@@ -258,6 +260,17 @@ static void test_reset_cause(void)
     r_rcc.CSR = pin | iwdg;
     TEST_ASSERT_EQUAL_INT(PMA_RESET_WATCHDOG, g4_reset_latch());
     TEST_ASSERT_BITS_HIGH((1u << 23), r_rcc.CSR); /* RMVF written */
+}
+
+/* The unique device id: the 12 bytes at UID_BASE, byte 0 first. */
+static void test_device_uid(void)
+{
+    uint8_t uid[PMA_HAL_STM32G474_UID_BYTES];
+    memset(uid, 0, sizeof uid);
+    pma_hal_stm32g474_device_uid(uid);
+    TEST_ASSERT_EQUAL_MEMORY(r_uid, uid, sizeof uid);
+    TEST_ASSERT_EQUAL_HEX8(0x30, uid[0]);
+    TEST_ASSERT_EQUAL_HEX8(0x30 + 77, uid[11]);
 }
 
 /* ----------------------------------------------------------------- time -- */
@@ -748,6 +761,7 @@ int main(void)
     RUN_TEST(test_clock_pll_failure_keeps_hsi);
     RUN_TEST(test_pll_dividers);
     RUN_TEST(test_reset_cause);
+    RUN_TEST(test_device_uid);
     RUN_TEST(test_tick_registers_for_each_rate);
     RUN_TEST(test_tick_start_and_wait);
     RUN_TEST(test_time_us_extends_to_64_bits);

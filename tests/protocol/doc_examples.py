@@ -26,6 +26,7 @@ DBC = ROOT / "firmware/protocol/pma_proto.dbc"
 BASE_ID_MASK = 0x7F0
 NODE_ID_MASK = 0x00F
 HEARTBEAT_BASE = 0x0A0
+BROADCAST_IDS = (0x000, 0x120)   # ESTOP_ALL, DEVICE_INFO_REQ_ALL: no node id
 WILDCARD = "XX"
 
 _FENCE = re.compile(r"^```(\S*)\s*$")

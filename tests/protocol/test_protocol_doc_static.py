@@ -78,7 +78,7 @@ def test_walk_through_starts_the_node_the_test_starts(doc) -> None:
             assert step.argv[1].split(",")[0] == "vcan0" or step.argv[-1].split(",")[0] == "vcan0"
             for f in step.expected:
                 assert f.iface == "vcan0"
-                assert f.can_id == 0 or f.can_id & dx.NODE_ID_MASK in (3, 4), (
+                assert f.can_id in dx.BROADCAST_IDS or f.can_id & dx.NODE_ID_MASK in (3, 4), (
                     f"line {step.line_no}: the examples talk to node 3")
 
 

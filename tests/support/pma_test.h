@@ -28,16 +28,15 @@
 
 #include "unity.h"
 
-/** Size of the message buffer of the helpers below (longer messages are truncated). */
+/** Size of the message buffer of pma_test_fail (longer messages are truncated). */
 #define PMA_TEST_MSG_CHARS 256
 
-/** Fails the current test with a printf-style message. */
-#define pma_test_fail(...)                                                                \
-    do {                                                                                  \
-        char pma_msg_[PMA_TEST_MSG_CHARS];                                                \
-        (void)snprintf(pma_msg_, sizeof pma_msg_, __VA_ARGS__);                           \
-        TEST_FAIL_MESSAGE(pma_msg_);                                                      \
-    } while (0)
+/** Fails the current test at `line` with a printf-style message (formatted into a static
+ *  buffer, so a long message costs no stack; pma_test.c). Use pma_test_fail(). */
+void pma_test_failf(unsigned line, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+
+/** Fails the current test with a printf-style message, reported at the line of the call. */
+#define pma_test_fail(...) pma_test_failf((unsigned)__LINE__, __VA_ARGS__)
 
 /** Fails with the values printed when |got - want| > tol (or either is NaN). */
 #define assert_near(got, want, tol)                                                       \

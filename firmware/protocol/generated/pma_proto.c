@@ -58,6 +58,14 @@ static inline uint8_t pack_left_shift_u32(
     return (uint8_t)((uint8_t)(value << shift) & mask);
 }
 
+static inline uint8_t pack_left_shift_u64(
+    uint64_t value,
+    uint8_t shift,
+    uint8_t mask)
+{
+    return (uint8_t)((uint8_t)(value << shift) & mask);
+}
+
 static inline uint8_t pack_right_shift_u16(
     uint16_t value,
     uint8_t shift,
@@ -68,6 +76,14 @@ static inline uint8_t pack_right_shift_u16(
 
 static inline uint8_t pack_right_shift_u32(
     uint32_t value,
+    uint8_t shift,
+    uint8_t mask)
+{
+    return (uint8_t)((uint8_t)(value >> shift) & mask);
+}
+
+static inline uint8_t pack_right_shift_u64(
+    uint64_t value,
     uint8_t shift,
     uint8_t mask)
 {
@@ -88,6 +104,14 @@ static inline uint32_t unpack_left_shift_u32(
     uint8_t mask)
 {
     return (uint32_t)((uint32_t)(value & mask) << shift);
+}
+
+static inline uint64_t unpack_left_shift_u64(
+    uint8_t value,
+    uint8_t shift,
+    uint8_t mask)
+{
+    return (uint64_t)((uint64_t)(value & mask) << shift);
 }
 
 static inline uint8_t unpack_right_shift_u8(
@@ -112,6 +136,14 @@ static inline uint32_t unpack_right_shift_u32(
     uint8_t mask)
 {
     return (uint32_t)((uint32_t)(value & mask) >> shift);
+}
+
+static inline uint64_t unpack_right_shift_u64(
+    uint8_t value,
+    uint8_t shift,
+    uint8_t mask)
+{
+    return (uint64_t)((uint64_t)(value & mask) >> shift);
 }
 
 static uint64_t cantools_unsigned_from_double(double value)
@@ -2005,4 +2037,447 @@ bool pma_proto_telem_e_breaches_is_in_range(uint16_t value)
 bool pma_proto_telem_e_breaches_is_in_phys_range(float value)
 {
     return ((value >= 0.0f) && (value <= 65535.0f));
+}
+
+int pma_proto_device_info_pack(
+    uint8_t *dst_p,
+    const struct pma_proto_device_info_t *src_p,
+    size_t size)
+{
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    memset(&dst_p[0], 0, 8);
+
+    dst_p[0] |= pack_left_shift_u8(src_p->page, 0u, 0xffu);
+
+    switch (src_p->page) {
+
+    case 0:
+        dst_p[1] |= pack_left_shift_u8(src_p->protocol_version, 0u, 0xffu);
+        dst_p[2] |= pack_left_shift_u8(src_p->fw_major, 0u, 0xffu);
+        dst_p[3] |= pack_left_shift_u8(src_p->fw_minor, 0u, 0xffu);
+        dst_p[4] |= pack_left_shift_u8(src_p->fw_patch, 0u, 0xffu);
+        dst_p[5] |= pack_left_shift_u8(src_p->build_target, 0u, 0xffu);
+        dst_p[6] |= pack_left_shift_u8(src_p->build_flags, 0u, 0xffu);
+        dst_p[7] |= pack_left_shift_u8(src_p->param_count, 0u, 0xffu);
+        break;
+
+    case 1:
+        dst_p[1] |= pack_left_shift_u32(src_p->fw_commit, 0u, 0xffu);
+        dst_p[2] |= pack_right_shift_u32(src_p->fw_commit, 8u, 0xffu);
+        dst_p[3] |= pack_right_shift_u32(src_p->fw_commit, 16u, 0xffu);
+        dst_p[4] |= pack_right_shift_u32(src_p->fw_commit, 24u, 0xffu);
+        break;
+
+    case 2:
+        dst_p[1] |= pack_left_shift_u32(src_p->param_table_hash, 0u, 0xffu);
+        dst_p[2] |= pack_right_shift_u32(src_p->param_table_hash, 8u, 0xffu);
+        dst_p[3] |= pack_right_shift_u32(src_p->param_table_hash, 16u, 0xffu);
+        dst_p[4] |= pack_right_shift_u32(src_p->param_table_hash, 24u, 0xffu);
+        break;
+
+    case 3:
+        dst_p[1] |= pack_left_shift_u64(src_p->uid_low, 0u, 0xffu);
+        dst_p[2] |= pack_right_shift_u64(src_p->uid_low, 8u, 0xffu);
+        dst_p[3] |= pack_right_shift_u64(src_p->uid_low, 16u, 0xffu);
+        dst_p[4] |= pack_right_shift_u64(src_p->uid_low, 24u, 0xffu);
+        dst_p[5] |= pack_right_shift_u64(src_p->uid_low, 32u, 0xffu);
+        dst_p[6] |= pack_right_shift_u64(src_p->uid_low, 40u, 0xffu);
+        dst_p[7] |= pack_right_shift_u64(src_p->uid_low, 48u, 0xffu);
+        break;
+
+    case 4:
+        dst_p[1] |= pack_left_shift_u64(src_p->uid_high, 0u, 0xffu);
+        dst_p[2] |= pack_right_shift_u64(src_p->uid_high, 8u, 0xffu);
+        dst_p[3] |= pack_right_shift_u64(src_p->uid_high, 16u, 0xffu);
+        dst_p[4] |= pack_right_shift_u64(src_p->uid_high, 24u, 0xffu);
+        dst_p[5] |= pack_right_shift_u64(src_p->uid_high, 32u, 0xffu);
+        break;
+
+    default:
+        break;
+    }
+
+    return (8);
+}
+
+int pma_proto_device_info_unpack(
+    struct pma_proto_device_info_t *dst_p,
+    const uint8_t *src_p,
+    size_t size)
+{
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    dst_p->page = unpack_right_shift_u8(src_p[0], 0u, 0xffu);
+
+    switch (dst_p->page) {
+
+    case 0:
+        dst_p->protocol_version = unpack_right_shift_u8(src_p[1], 0u, 0xffu);
+        dst_p->fw_major = unpack_right_shift_u8(src_p[2], 0u, 0xffu);
+        dst_p->fw_minor = unpack_right_shift_u8(src_p[3], 0u, 0xffu);
+        dst_p->fw_patch = unpack_right_shift_u8(src_p[4], 0u, 0xffu);
+        dst_p->build_target = unpack_right_shift_u8(src_p[5], 0u, 0xffu);
+        dst_p->build_flags = unpack_right_shift_u8(src_p[6], 0u, 0xffu);
+        dst_p->param_count = unpack_right_shift_u8(src_p[7], 0u, 0xffu);
+        break;
+
+    case 1:
+        dst_p->fw_commit = unpack_right_shift_u32(src_p[1], 0u, 0xffu);
+        dst_p->fw_commit |= unpack_left_shift_u32(src_p[2], 8u, 0xffu);
+        dst_p->fw_commit |= unpack_left_shift_u32(src_p[3], 16u, 0xffu);
+        dst_p->fw_commit |= unpack_left_shift_u32(src_p[4], 24u, 0xffu);
+        break;
+
+    case 2:
+        dst_p->param_table_hash = unpack_right_shift_u32(src_p[1], 0u, 0xffu);
+        dst_p->param_table_hash |= unpack_left_shift_u32(src_p[2], 8u, 0xffu);
+        dst_p->param_table_hash |= unpack_left_shift_u32(src_p[3], 16u, 0xffu);
+        dst_p->param_table_hash |= unpack_left_shift_u32(src_p[4], 24u, 0xffu);
+        break;
+
+    case 3:
+        dst_p->uid_low = unpack_right_shift_u64(src_p[1], 0u, 0xffu);
+        dst_p->uid_low |= unpack_left_shift_u64(src_p[2], 8u, 0xffu);
+        dst_p->uid_low |= unpack_left_shift_u64(src_p[3], 16u, 0xffu);
+        dst_p->uid_low |= unpack_left_shift_u64(src_p[4], 24u, 0xffu);
+        dst_p->uid_low |= unpack_left_shift_u64(src_p[5], 32u, 0xffu);
+        dst_p->uid_low |= unpack_left_shift_u64(src_p[6], 40u, 0xffu);
+        dst_p->uid_low |= unpack_left_shift_u64(src_p[7], 48u, 0xffu);
+        break;
+
+    case 4:
+        dst_p->uid_high = unpack_right_shift_u64(src_p[1], 0u, 0xffu);
+        dst_p->uid_high |= unpack_left_shift_u64(src_p[2], 8u, 0xffu);
+        dst_p->uid_high |= unpack_left_shift_u64(src_p[3], 16u, 0xffu);
+        dst_p->uid_high |= unpack_left_shift_u64(src_p[4], 24u, 0xffu);
+        dst_p->uid_high |= unpack_left_shift_u64(src_p[5], 32u, 0xffu);
+        break;
+
+    default:
+        break;
+    }
+
+    return (0);
+}
+
+int pma_proto_device_info_init(struct pma_proto_device_info_t *msg_p)
+{
+    if (msg_p == NULL) return -1;
+
+    memset(msg_p, 0, sizeof(struct pma_proto_device_info_t));
+
+    return 0;
+}
+
+uint8_t pma_proto_device_info_page_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float pma_proto_device_info_page_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool pma_proto_device_info_page_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool pma_proto_device_info_page_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 255.0f));
+}
+
+uint8_t pma_proto_device_info_protocol_version_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float pma_proto_device_info_protocol_version_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool pma_proto_device_info_protocol_version_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool pma_proto_device_info_protocol_version_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 255.0f));
+}
+
+uint32_t pma_proto_device_info_fw_commit_encode(float value)
+{
+    return (uint32_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float pma_proto_device_info_fw_commit_decode(uint32_t value)
+{
+    return ((float)value);
+}
+
+bool pma_proto_device_info_fw_commit_is_in_range(uint32_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool pma_proto_device_info_fw_commit_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 4294967295.0f));
+}
+
+uint32_t pma_proto_device_info_param_table_hash_encode(float value)
+{
+    return (uint32_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float pma_proto_device_info_param_table_hash_decode(uint32_t value)
+{
+    return ((float)value);
+}
+
+bool pma_proto_device_info_param_table_hash_is_in_range(uint32_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool pma_proto_device_info_param_table_hash_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 4294967295.0f));
+}
+
+uint64_t pma_proto_device_info_uid_low_encode(float value)
+{
+    return (uint64_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float pma_proto_device_info_uid_low_decode(uint64_t value)
+{
+    return ((float)value);
+}
+
+bool pma_proto_device_info_uid_low_is_in_range(uint64_t value)
+{
+    return (value <= 72057594037927935ull);
+}
+
+bool pma_proto_device_info_uid_low_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 7.205759403792794e+16f));
+}
+
+uint64_t pma_proto_device_info_uid_high_encode(float value)
+{
+    return (uint64_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float pma_proto_device_info_uid_high_decode(uint64_t value)
+{
+    return ((float)value);
+}
+
+bool pma_proto_device_info_uid_high_is_in_range(uint64_t value)
+{
+    return (value <= 1099511627775ull);
+}
+
+bool pma_proto_device_info_uid_high_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 1099511627775.0f));
+}
+
+uint8_t pma_proto_device_info_fw_major_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float pma_proto_device_info_fw_major_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool pma_proto_device_info_fw_major_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool pma_proto_device_info_fw_major_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 255.0f));
+}
+
+uint8_t pma_proto_device_info_fw_minor_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float pma_proto_device_info_fw_minor_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool pma_proto_device_info_fw_minor_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool pma_proto_device_info_fw_minor_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 255.0f));
+}
+
+uint8_t pma_proto_device_info_fw_patch_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float pma_proto_device_info_fw_patch_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool pma_proto_device_info_fw_patch_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool pma_proto_device_info_fw_patch_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 255.0f));
+}
+
+uint8_t pma_proto_device_info_build_target_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float pma_proto_device_info_build_target_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool pma_proto_device_info_build_target_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool pma_proto_device_info_build_target_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 255.0f));
+}
+
+uint8_t pma_proto_device_info_build_flags_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float pma_proto_device_info_build_flags_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool pma_proto_device_info_build_flags_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool pma_proto_device_info_build_flags_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 255.0f));
+}
+
+uint8_t pma_proto_device_info_param_count_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float pma_proto_device_info_param_count_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool pma_proto_device_info_param_count_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool pma_proto_device_info_param_count_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 255.0f));
+}
+
+int pma_proto_device_info_req_pack(
+    uint8_t *dst_p,
+    const struct pma_proto_device_info_req_t *src_p,
+    size_t size)
+{
+    (void)dst_p;
+    (void)src_p;
+    (void)size;
+
+    return (0);
+}
+
+int pma_proto_device_info_req_unpack(
+    struct pma_proto_device_info_req_t *dst_p,
+    const uint8_t *src_p,
+    size_t size)
+{
+    (void)dst_p;
+    (void)src_p;
+    (void)size;
+
+    return (0);
+}
+
+int pma_proto_device_info_req_all_pack(
+    uint8_t *dst_p,
+    const struct pma_proto_device_info_req_all_t *src_p,
+    size_t size)
+{
+    (void)dst_p;
+    (void)src_p;
+    (void)size;
+
+    return (0);
+}
+
+int pma_proto_device_info_req_all_unpack(
+    struct pma_proto_device_info_req_all_t *dst_p,
+    const uint8_t *src_p,
+    size_t size)
+{
+    (void)dst_p;
+    (void)src_p;
+    (void)size;
+
+    return (0);
 }

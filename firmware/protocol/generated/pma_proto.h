@@ -61,6 +61,9 @@ extern "C" {
 #define PMA_PROTO_TELEM_C_FRAME_ID (0xd0u)
 #define PMA_PROTO_TELEM_D_FRAME_ID (0xe0u)
 #define PMA_PROTO_TELEM_E_FRAME_ID (0xf0u)
+#define PMA_PROTO_DEVICE_INFO_FRAME_ID (0x100u)
+#define PMA_PROTO_DEVICE_INFO_REQ_FRAME_ID (0x110u)
+#define PMA_PROTO_DEVICE_INFO_REQ_ALL_FRAME_ID (0x120u)
 
 /* Frame lengths in bytes. */
 #define PMA_PROTO_ESTOP_ALL_LENGTH (0u)
@@ -79,6 +82,9 @@ extern "C" {
 #define PMA_PROTO_TELEM_C_LENGTH (8u)
 #define PMA_PROTO_TELEM_D_LENGTH (8u)
 #define PMA_PROTO_TELEM_E_LENGTH (8u)
+#define PMA_PROTO_DEVICE_INFO_LENGTH (8u)
+#define PMA_PROTO_DEVICE_INFO_REQ_LENGTH (0u)
+#define PMA_PROTO_DEVICE_INFO_REQ_ALL_LENGTH (0u)
 
 /* Extended or standard frame types. */
 #define PMA_PROTO_ESTOP_ALL_IS_EXTENDED (0)
@@ -97,6 +103,9 @@ extern "C" {
 #define PMA_PROTO_TELEM_C_IS_EXTENDED (0)
 #define PMA_PROTO_TELEM_D_IS_EXTENDED (0)
 #define PMA_PROTO_TELEM_E_IS_EXTENDED (0)
+#define PMA_PROTO_DEVICE_INFO_IS_EXTENDED (0)
+#define PMA_PROTO_DEVICE_INFO_REQ_IS_EXTENDED (0)
+#define PMA_PROTO_DEVICE_INFO_REQ_ALL_IS_EXTENDED (0)
 
 /* Frame cycle times in milliseconds. */
 
@@ -253,6 +262,19 @@ extern "C" {
 #define PMA_PROTO_HEARTBEAT_RESET_CAUSE_PIN_CHOICE (4u)
 #define PMA_PROTO_HEARTBEAT_RESET_CAUSE_BROWNOUT_CHOICE (5u)
 
+#define PMA_PROTO_DEVICE_INFO_PAGE_VERSION_CHOICE (0u)
+#define PMA_PROTO_DEVICE_INFO_PAGE_COMMIT_CHOICE (1u)
+#define PMA_PROTO_DEVICE_INFO_PAGE_PARAMS_CHOICE (2u)
+#define PMA_PROTO_DEVICE_INFO_PAGE_UID_LOW_CHOICE (3u)
+#define PMA_PROTO_DEVICE_INFO_PAGE_UID_HIGH_CHOICE (4u)
+
+#define PMA_PROTO_DEVICE_INFO_BUILD_TARGET_UNKNOWN_CHOICE (0u)
+#define PMA_PROTO_DEVICE_INFO_BUILD_TARGET_HOST_CHOICE (1u)
+#define PMA_PROTO_DEVICE_INFO_BUILD_TARGET_STM32_G474_CHOICE (2u)
+#define PMA_PROTO_DEVICE_INFO_BUILD_TARGET_CORTEX_M4_F_CHOICE (3u)
+#define PMA_PROTO_DEVICE_INFO_BUILD_TARGET_CORTEX_M3_CHOICE (4u)
+#define PMA_PROTO_DEVICE_INFO_BUILD_TARGET_CORTEX_M0_CHOICE (5u)
+
 /* Frame Names. */
 #define PMA_PROTO_ESTOP_ALL_NAME "ESTOP_ALL"
 #define PMA_PROTO_ESTOP_NAME "ESTOP"
@@ -270,6 +292,9 @@ extern "C" {
 #define PMA_PROTO_TELEM_C_NAME "TELEM_C"
 #define PMA_PROTO_TELEM_D_NAME "TELEM_D"
 #define PMA_PROTO_TELEM_E_NAME "TELEM_E"
+#define PMA_PROTO_DEVICE_INFO_NAME "DEVICE_INFO"
+#define PMA_PROTO_DEVICE_INFO_REQ_NAME "DEVICE_INFO_REQ"
+#define PMA_PROTO_DEVICE_INFO_REQ_ALL_NAME "DEVICE_INFO_REQ_ALL"
 
 /* Signal Names. */
 #define PMA_PROTO_PLANT_SENSOR_SEQ_NAME "Seq"
@@ -318,6 +343,18 @@ extern "C" {
 #define PMA_PROTO_TELEM_E_PRESSURE_KPA_NAME "PressureKpa"
 #define PMA_PROTO_TELEM_E_CTRL_FLAGS_NAME "CtrlFlags"
 #define PMA_PROTO_TELEM_E_BREACHES_NAME "Breaches"
+#define PMA_PROTO_DEVICE_INFO_PAGE_NAME "Page"
+#define PMA_PROTO_DEVICE_INFO_PROTOCOL_VERSION_NAME "ProtocolVersion"
+#define PMA_PROTO_DEVICE_INFO_FW_COMMIT_NAME "FwCommit"
+#define PMA_PROTO_DEVICE_INFO_PARAM_TABLE_HASH_NAME "ParamTableHash"
+#define PMA_PROTO_DEVICE_INFO_UID_LOW_NAME "UidLow"
+#define PMA_PROTO_DEVICE_INFO_UID_HIGH_NAME "UidHigh"
+#define PMA_PROTO_DEVICE_INFO_FW_MAJOR_NAME "FwMajor"
+#define PMA_PROTO_DEVICE_INFO_FW_MINOR_NAME "FwMinor"
+#define PMA_PROTO_DEVICE_INFO_FW_PATCH_NAME "FwPatch"
+#define PMA_PROTO_DEVICE_INFO_BUILD_TARGET_NAME "BuildTarget"
+#define PMA_PROTO_DEVICE_INFO_BUILD_FLAGS_NAME "BuildFlags"
+#define PMA_PROTO_DEVICE_INFO_PARAM_COUNT_NAME "ParamCount"
 
 /**
  * Signals in message ESTOP_ALL.
@@ -811,6 +848,141 @@ struct pma_proto_telem_e_t {
      * Offset: 0
      */
     uint16_t breaches;
+};
+
+/**
+ * Signals in message DEVICE_INFO.
+ *
+ * Identity of the node, the reply to DEVICE_INFO_REQ and DEVICE_INFO_REQ_ALL: five frames, Page 0 to 4, sent at once. Page 0: the protocol version (the number in this file's VERSION line), the firmware version, the build target, the build flags and the number of parameters; 1: the firmware's git commit; 2: the parameter table's hash; 3 and 4: the device's 96-bit unique id.
+ *
+ * All signal values are as on the CAN bus.
+ */
+struct pma_proto_device_info_t {
+    /**
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t page;
+
+    /**
+     * The protocol version the node speaks: the number of this file's VERSION line. A client that speaks another reports the node, it does not decode its other messages.
+     *
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t protocol_version;
+
+    /**
+     * The first 8 hexadecimal digits of the git commit the firmware was built from, as a number.
+     *
+     * Range: 0..4294967295 (0..4294967295 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint32_t fw_commit;
+
+    /**
+     * CRC-32 of the parameter table (ids, names, types, ranges, defaults; firmware/app/params.toml): equal hashes, equal tables.
+     *
+     * Range: 0..4294967295 (0..4294967295 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint32_t param_table_hash;
+
+    /**
+     * Bytes 0..6 of the 12-byte unique device id (byte 0 least significant). STM32: the 96-bit UID; host build: from --uid or derived from the storage file.
+     *
+     * Range: 0..72057594037927935 (0..72057594037927935 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint64_t uid_low;
+
+    /**
+     * Bytes 7..11 of the 12-byte unique device id.
+     *
+     * Range: 0..1099511627775 (0..1099511627775 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint64_t uid_high;
+
+    /**
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t fw_major;
+
+    /**
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t fw_minor;
+
+    /**
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t fw_patch;
+
+    /**
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t build_target;
+
+    /**
+     * Bit 0: built from a tree with uncommitted changes; bit 1: the git commit is unknown (FwCommit 0).
+     *
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t build_flags;
+
+    /**
+     * Number of parameters in the node's table.
+     *
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t param_count;
+};
+
+/**
+ * Signals in message DEVICE_INFO_REQ.
+ *
+ * Request to one node for its DEVICE_INFO (no data; another length is dropped and counted).
+ *
+ * All signal values are as on the CAN bus.
+ */
+struct pma_proto_device_info_req_t {
+    /**
+     * Dummy signal in empty message.
+     */
+    uint8_t dummy;
+};
+
+/**
+ * Signals in message DEVICE_INFO_REQ_ALL.
+ *
+ * Request to every node on the bus for its DEVICE_INFO (broadcast, no data): how a scan finds two devices on one node id.
+ *
+ * All signal values are as on the CAN bus.
+ */
+struct pma_proto_device_info_req_all_t {
+    /**
+     * Dummy signal in empty message.
+     */
+    uint8_t dummy;
 };
 
 /**
@@ -3244,6 +3416,597 @@ bool pma_proto_telem_e_breaches_is_in_range(uint16_t value);
  * @return true if in range, false otherwise.
  */
 bool pma_proto_telem_e_breaches_is_in_phys_range(float value);
+
+/**
+ * Pack message DEVICE_INFO.
+ *
+ * @param[out] dst_p Buffer to pack the message into.
+ * @param[in] src_p Data to pack.
+ * @param[in] size Size of dst_p.
+ *
+ * @return Size of packed data, or negative error code.
+ */
+int pma_proto_device_info_pack(
+    uint8_t *dst_p,
+    const struct pma_proto_device_info_t *src_p,
+    size_t size);
+
+/**
+ * Unpack message DEVICE_INFO.
+ *
+ * @param[out] dst_p Object to unpack the message into.
+ * @param[in] src_p Message to unpack.
+ * @param[in] size Size of src_p.
+ *
+ * @return zero(0) or negative error code.
+ */
+int pma_proto_device_info_unpack(
+    struct pma_proto_device_info_t *dst_p,
+    const uint8_t *src_p,
+    size_t size);
+
+/**
+ * Init message fields to default values from DEVICE_INFO.
+ *
+ * @param[in] msg_p Message to init.
+ *
+ * @return zero(0) on success or (-1) in case of nullptr argument.
+ */
+int pma_proto_device_info_init(struct pma_proto_device_info_t *msg_p);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t pma_proto_device_info_page_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float pma_proto_device_info_page_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool pma_proto_device_info_page_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool pma_proto_device_info_page_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t pma_proto_device_info_protocol_version_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float pma_proto_device_info_protocol_version_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool pma_proto_device_info_protocol_version_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool pma_proto_device_info_protocol_version_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint32_t pma_proto_device_info_fw_commit_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float pma_proto_device_info_fw_commit_decode(uint32_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool pma_proto_device_info_fw_commit_is_in_range(uint32_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool pma_proto_device_info_fw_commit_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint32_t pma_proto_device_info_param_table_hash_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float pma_proto_device_info_param_table_hash_decode(uint32_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool pma_proto_device_info_param_table_hash_is_in_range(uint32_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool pma_proto_device_info_param_table_hash_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint64_t pma_proto_device_info_uid_low_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float pma_proto_device_info_uid_low_decode(uint64_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool pma_proto_device_info_uid_low_is_in_range(uint64_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool pma_proto_device_info_uid_low_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint64_t pma_proto_device_info_uid_high_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float pma_proto_device_info_uid_high_decode(uint64_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool pma_proto_device_info_uid_high_is_in_range(uint64_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool pma_proto_device_info_uid_high_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t pma_proto_device_info_fw_major_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float pma_proto_device_info_fw_major_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool pma_proto_device_info_fw_major_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool pma_proto_device_info_fw_major_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t pma_proto_device_info_fw_minor_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float pma_proto_device_info_fw_minor_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool pma_proto_device_info_fw_minor_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool pma_proto_device_info_fw_minor_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t pma_proto_device_info_fw_patch_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float pma_proto_device_info_fw_patch_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool pma_proto_device_info_fw_patch_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool pma_proto_device_info_fw_patch_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t pma_proto_device_info_build_target_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float pma_proto_device_info_build_target_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool pma_proto_device_info_build_target_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool pma_proto_device_info_build_target_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t pma_proto_device_info_build_flags_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float pma_proto_device_info_build_flags_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool pma_proto_device_info_build_flags_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool pma_proto_device_info_build_flags_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t pma_proto_device_info_param_count_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float pma_proto_device_info_param_count_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool pma_proto_device_info_param_count_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool pma_proto_device_info_param_count_is_in_phys_range(float value);
+
+/**
+ * Pack message DEVICE_INFO_REQ.
+ *
+ * @param[out] dst_p Buffer to pack the message into.
+ * @param[in] src_p Data to pack.
+ * @param[in] size Size of dst_p.
+ *
+ * @return Size of packed data, or negative error code.
+ */
+int pma_proto_device_info_req_pack(
+    uint8_t *dst_p,
+    const struct pma_proto_device_info_req_t *src_p,
+    size_t size);
+
+/**
+ * Unpack message DEVICE_INFO_REQ.
+ *
+ * @param[out] dst_p Object to unpack the message into.
+ * @param[in] src_p Message to unpack.
+ * @param[in] size Size of src_p.
+ *
+ * @return zero(0) or negative error code.
+ */
+int pma_proto_device_info_req_unpack(
+    struct pma_proto_device_info_req_t *dst_p,
+    const uint8_t *src_p,
+    size_t size);
+
+/**
+ * Init message fields to default values from DEVICE_INFO_REQ.
+ *
+ * @param[in] msg_p Message to init.
+ *
+ * @return zero(0) on success or (-1) in case of nullptr argument.
+ */
+int pma_proto_device_info_req_init(struct pma_proto_device_info_req_t *msg_p);
+
+/**
+ * Pack message DEVICE_INFO_REQ_ALL.
+ *
+ * @param[out] dst_p Buffer to pack the message into.
+ * @param[in] src_p Data to pack.
+ * @param[in] size Size of dst_p.
+ *
+ * @return Size of packed data, or negative error code.
+ */
+int pma_proto_device_info_req_all_pack(
+    uint8_t *dst_p,
+    const struct pma_proto_device_info_req_all_t *src_p,
+    size_t size);
+
+/**
+ * Unpack message DEVICE_INFO_REQ_ALL.
+ *
+ * @param[out] dst_p Object to unpack the message into.
+ * @param[in] src_p Message to unpack.
+ * @param[in] size Size of src_p.
+ *
+ * @return zero(0) or negative error code.
+ */
+int pma_proto_device_info_req_all_unpack(
+    struct pma_proto_device_info_req_all_t *dst_p,
+    const uint8_t *src_p,
+    size_t size);
+
+/**
+ * Init message fields to default values from DEVICE_INFO_REQ_ALL.
+ *
+ * @param[in] msg_p Message to init.
+ *
+ * @return zero(0) on success or (-1) in case of nullptr argument.
+ */
+int pma_proto_device_info_req_all_init(struct pma_proto_device_info_req_all_t *msg_p);
 
 
 #ifdef __cplusplus

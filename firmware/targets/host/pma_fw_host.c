@@ -5,7 +5,7 @@
  * clocks the control loop: one tick per sensor sample.
  *
  * Usage: see usage() below, or pma-fw-host --help. */
-#define _POSIX_C_SOURCE 200809L
+#define _XOPEN_SOURCE 700 /* realpath, gethostname */
 #include <errno.h>
 #include <getopt.h>
 #include <limits.h>
@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include "app.h"
+#include "crc32.h"
 #include "generated/pma_proto.h"
 #include "pma_hal_linux.h"
 
@@ -50,6 +51,9 @@ static void usage(FILE *out)
         "                      absent; default: none, SAVE then answers PMA_ERR_NOT_IMPLEMENTED)\n"
         "  --lockstep          one control tick per received PLANT_SENSOR frame, instead of\n"
         "                      real time at sys.tick_hz: deterministic HIL runs at any speed\n"
+        "  --uid HEX           the device's 12-byte unique id, 24 hex digits (DEVICE_INFO);\n"
+        "                      default: derived from the --storage file's path, else from the\n"
+        "                      host name and process id\n"
         "  --watchdog-ms MS    software watchdog timeout, 1..60000 (default 1000); on expiry\n"
         "                      the program restarts itself and reports WATCHDOG_RESET\n"
         "  --verbose           log state changes and faults to stderr\n"
@@ -76,15 +80,59 @@ static int parse_long(const char *s, long lo, long hi, long *out)
     return 1;
 }
 
+/* Exactly 2 * PMA_DEVICE_UID_BYTES hex digits into uid, else 0. */
+static int parse_uid(const char *s, uint8_t uid[PMA_DEVICE_UID_BYTES])
+{
+    if (s == NULL || strlen(s) != 2u * PMA_DEVICE_UID_BYTES) return 0;
+    for (unsigned k = 0; k < PMA_DEVICE_UID_BYTES; ++k) {
+        unsigned v = 0;
+        for (unsigned h = 0; h < 2u; ++h) {
+            const char c = s[2u * k + h];
+            unsigned d;
+            if (c >= '0' && c <= '9') d = (unsigned)(c - '0');
+            else if (c >= 'a' && c <= 'f') d = (unsigned)(c - 'a' + 10);
+            else if (c >= 'A' && c <= 'F') d = (unsigned)(c - 'A' + 10);
+            else return 0;
+            v = (v << 4) | d;
+        }
+        uid[k] = (uint8_t)v;
+    }
+    return 1;
+}
+
+/* The default unique id: three CRC-32s of what identifies this device, each salted with its
+ * index. The storage file is the device (its parameters live there), so the same file gives the
+ * same id across restarts; without one, the host name and process id (a watchdog restart
+ * re-executes in the same process, so it keeps its id). */
+static void derive_uid(const char *storage, uint8_t uid[PMA_DEVICE_UID_BYTES])
+{
+    char what[PATH_MAX + 64];
+    char resolved[PATH_MAX];
+    if (storage != NULL && realpath(storage, resolved) != NULL) {
+        snprintf(what, sizeof what, "storage:%s", resolved);
+    } else {
+        char host[64] = "";
+        (void)gethostname(host, sizeof host - 1u);
+        snprintf(what, sizeof what, "process:%s:%ld", host, (long)getpid());
+    }
+    for (unsigned k = 0; k < PMA_DEVICE_UID_BYTES / 4u; ++k) {
+        const uint8_t salt = (uint8_t)k;
+        const uint32_t c = pma_crc32_update(pma_crc32(&salt, 1u), what, strlen(what));
+        for (unsigned b = 0; b < 4u; ++b) uid[4u * k + b] = (uint8_t)(c >> (8u * b));
+    }
+}
+
 typedef struct options {
     const char *can, *storage;
+    uint8_t uid[PMA_DEVICE_UID_BYTES];
+    int have_uid;
     long node, watchdog_ms, cut_after, cut_permille, stall_after;
     int lockstep, verbose;
 } options_t;
 
 static int parse_options(int argc, char **argv, options_t *o)
 {
-    enum { OPT_WATCHDOG = 256, OPT_VERBOSE, OPT_CUT, OPT_PERMILLE, OPT_STALL };
+    enum { OPT_WATCHDOG = 256, OPT_VERBOSE, OPT_CUT, OPT_PERMILLE, OPT_STALL, OPT_UID };
     static const struct option longopts[] = {
         {"can", required_argument, NULL, 'c'},
         {"node", required_argument, NULL, 'n'},
@@ -92,6 +140,7 @@ static int parse_options(int argc, char **argv, options_t *o)
         {"lockstep", no_argument, NULL, 'l'},
         {"help", no_argument, NULL, 'h'},
         {"watchdog-ms", required_argument, NULL, OPT_WATCHDOG},
+        {"uid", required_argument, NULL, OPT_UID},
         {"verbose", no_argument, NULL, OPT_VERBOSE},
         {"test-nvm-cut-after", required_argument, NULL, OPT_CUT},
         {"test-nvm-cut-permille", required_argument, NULL, OPT_PERMILLE},
@@ -111,6 +160,10 @@ static int parse_options(int argc, char **argv, options_t *o)
         case 'h': usage(stdout); exit(0);
         case OPT_VERBOSE: o->verbose = 1; break;
         case 'n': if (!parse_long(optarg, 0, 15, &o->node)) bad = "--node wants 0..15"; break;
+        case OPT_UID:
+            if (!parse_uid(optarg, o->uid)) bad = "--uid wants 24 hexadecimal digits (12 bytes)";
+            o->have_uid = 1;
+            break;
         case OPT_WATCHDOG:
             if (!parse_long(optarg, 1, PMA_HAL_LINUX_WATCHDOG_MAX_MS, &o->watchdog_ms)) {
                 bad = "--watchdog-ms wants 1..60000";
@@ -183,7 +236,7 @@ int main(int argc, char **argv)
     }
 
     static pma_app_t app; /* static: the board has no heap either */
-    const pma_app_platform_t plat = {
+    pma_app_platform_t plat = {
         .plant_bridge = 1,
         .lockstep = (uint8_t)o.lockstep,
         .node_id = (int16_t)o.node,
@@ -191,6 +244,11 @@ int main(int argc, char **argv)
         .store_blocks_per_slot = o.storage != NULL ? HOST_NVM_BLOCKS / 2u : 0u,
         .watchdog_ms = (uint32_t)o.watchdog_ms,
     };
+    if (o.have_uid) {
+        memcpy(plat.device_uid, o.uid, sizeof plat.device_uid);
+    } else {
+        derive_uid(o.storage, plat.device_uid); /* after pma_hal_init: the file exists now */
+    }
     int rc = pma_app_init(&app, &plat);
     if (rc != PMA_OK) {
         fprintf(stderr, "pma-fw-host: start-up failed: %s (%s)\n", pma_status_name(rc),

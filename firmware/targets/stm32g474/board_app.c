@@ -4,9 +4,9 @@
 #include <stddef.h>
 #include <string.h>
 
-pma_app_platform_t board_platform(void)
+pma_app_platform_t board_platform(const uint8_t *device_uid)
 {
-    const pma_app_platform_t p = {
+    pma_app_platform_t p = {
         .plant_bridge = 0,   /* the ADC and DAC; sys.plant_bridge switches to CAN frames */
         .lockstep = 0,       /* a hardware timer ticks the loop */
         .node_id = -1,       /* the stored sys.node_id */
@@ -14,6 +14,7 @@ pma_app_platform_t board_platform(void)
         .store_blocks_per_slot = BOARD_STORE_BLOCKS_PER_SLOT,
         .watchdog_ms = BOARD_WATCHDOG_MS,
     };
+    if (device_uid != NULL) memcpy(p.device_uid, device_uid, sizeof p.device_uid);
     return p;
 }
 
@@ -43,7 +44,8 @@ static void led_update(board_t *b, const pma_app_t *app)
     }
 }
 
-int board_start(board_t *b, pma_app_t *app, const pma_hal_config_t *hc)
+int board_start(board_t *b, pma_app_t *app, const pma_hal_config_t *hc,
+                const uint8_t *device_uid)
 {
     if (b == NULL || app == NULL) return PMA_ERR_NULL;
     memset(b, 0, sizeof *b);
@@ -58,7 +60,7 @@ int board_start(board_t *b, pma_app_t *app, const pma_hal_config_t *hc)
         b->last_rc = rc;
         return rc;
     }
-    const pma_app_platform_t plat = board_platform();
+    const pma_app_platform_t plat = board_platform(device_uid);
     rc = pma_app_init(app, &plat);
     led_update(b, app);
     b->last_rc = rc;

@@ -34,16 +34,18 @@ typedef struct board {
     int last_rc;                         /* last pma_app_step result */
 } board_t;
 
-/* The application platform of the board. */
-pma_app_platform_t board_platform(void);
+/* The application platform of the board, with its unique device id (NULL: unknown, zeros). */
+pma_app_platform_t board_platform(const uint8_t *device_uid);
 
 /* 1 when the LED is on for this state at time_ms. */
 int board_led_on(uint8_t state, uint64_t time_ms);
 
 /* Starts watchdog, HAL and application; the HAL configuration hc may be
- * NULL (defaults: 1 Mbit/s). Returns PMA_OK or the first error (the
- * application is then in FAULT INIT, or the HAL is not up). */
-int board_start(board_t *b, pma_app_t *app, const pma_hal_config_t *hc);
+ * NULL (defaults: 1 Mbit/s), device_uid the board's unique id
+ * (PMA_DEVICE_UID_BYTES bytes; NULL: unknown). Returns PMA_OK or the first
+ * error (the application is then in FAULT INIT, or the HAL is not up). */
+int board_start(board_t *b, pma_app_t *app, const pma_hal_config_t *hc,
+                const uint8_t *device_uid);
 
 /* One main-loop iteration: pma_app_step(), then the LED. Returns the step's
  * result (PMA_OK, or the tick's error: the loop cannot go on). */

@@ -25,7 +25,10 @@ int main(void)
 {
     static pma_app_t app; /* static: no heap, and off the 4 KB stack */
     static board_t board;
-    int rc = board_start(&board, &app, NULL);
+    uint8_t uid[PMA_HAL_STM32G474_UID_BYTES];
+    pma_hal_stm32g474_device_uid(uid);
+    _Static_assert(PMA_HAL_STM32G474_UID_BYTES == PMA_DEVICE_UID_BYTES, "the UID is the device id");
+    int rc = board_start(&board, &app, NULL, uid);
     if (rc != PMA_OK && app.state != PMA_STATE_FAULT) halt();
     for (;;) {
         rc = board_step(&board, &app);

@@ -17,7 +17,7 @@ from typing import Any, Callable, Sequence
 import can
 import cantools
 
-from pmactl import paramfile
+from pmactl import identity, paramfile
 from pmactl.client import (NODE_REPLIES, CommandError, InterfaceError, MonitorEvent, BusMonitor, NodeStateError,
                            NoReply, ParamInfo, PmaError, PmaNode, RecordProgress, SetRejected,
                            Status, TelemetryRecorder, bus_config, describe_bus, open_bus, scan)
@@ -130,10 +130,14 @@ def build_parser() -> argparse.ArgumentParser:
         return sub.add_parser(name, help=help_text, description=help_text, parents=[common],
                               formatter_class=fmt, epilog=EXIT_CODES_HELP, **kw)
 
-    p = add("scan", "list the nodes on the bus, from their heartbeats")
+    p = add("scan", "list the nodes on the bus (heartbeats) and the devices behind them "
+                    "(DEVICE_INFO): firmware, unique id; two devices on one node id are reported")
     p.add_argument("--seconds", type=_positive, default=1.0, help="how long to listen (default 1.0 s)")
 
-    add("status", "the node's state, fault, flags, controller, reference and reset cause")
+    add("status", "the node's state, fault, flags, controller, reference and reset cause, and "
+                  "its identity")
+    add("info", "the node's identity (DEVICE_INFO): firmware version and commit, build target, "
+                "protocol version, parameter table, unique device id")
 
     p = add("params", "read, write, save and restore parameters")
     psub = p.add_subparsers(dest="params_command", metavar="ACTION", required=True)
@@ -247,7 +251,7 @@ class Session:
             # client that takes every frame falls behind (record sets its own).
             cmd = self.args.command
             if cmd == "scan" or (cmd == "estop" and self.args.all):
-                self._node.listen_to(["HEARTBEAT"], node=None)
+                self._node.listen_to(["HEARTBEAT", "DEVICE_INFO"], node=None)
             elif cmd == "monitor":
                 self._node.listen_to(["HEARTBEAT", "ESTOP", "ESTOP_ALL", "COMMAND", "COMMAND_ACK",
                                       "PARAM_RESP"], node=None)
@@ -308,26 +312,69 @@ def _status_lines(st: Status, bus_text: str) -> list[str]:
 
 
 # ---------------------------------------------------------------- commands --
+def _identity_lines(dev: identity.DeviceInfo) -> list[str]:
+    return [f"  firmware     {dev.fw_text} ({dev.build_target or '?'})",
+            f"  protocol     {dev.protocol_version if dev.protocol_version is not None else '?'}",
+            f"  parameters   {dev.param_count if dev.param_count is not None else '?'}, table hash "
+            f"{'?' if dev.param_table_hash is None else f'{dev.param_table_hash:08x}'}",
+            f"  unique id    {dev.uid_hex}"] + [f"  warning      {p}" for p in dev.problems]
+
+
 def cmd_scan(s: Session) -> int:
     node = s.node
-    found = scan(node, s.args.seconds)
-    if not found:
+    found, devices = identity.scan_with_identity(node, s.args.seconds)
+    if not found and not devices:
         raise NoReply(f"no node heartbeat on {s.bus_text} within {s.args.seconds:g} s")
-    rows = [["node", "state", "fault", "controller", "reference", "flags"]]
-    for nid, st in found.items():
-        rows.append([str(nid), st.state_name, st.fault_name, st.controller_name, st.reference_name,
-                     " ".join(st.flag_names) or "-"])
+    rows = [["node", "state", "fault", "controller", "reference", "firmware", "unique id", "flags"]]
+    for nid in sorted(set(found) | set(devices)):
+        st = found.get(nid)
+        devs = devices.get(nid) or [None]
+        for dev in devs:
+            fw = dev.fw_text if dev is not None else "(no DEVICE_INFO)"
+            uid = dev.uid_hex if dev is not None else "?"
+            if st is None:
+                rows.append([str(nid), "?", "?", "?", "?", fw, uid, "(no heartbeat)"])
+            else:
+                rows.append([str(nid), st.state_name, st.fault_name, st.controller_name,
+                             st.reference_name, fw, uid, " ".join(st.flag_names) or "-"])
     for line in _table(rows, {0}):
         s.out(line)
     s.out(f"{len(found)} node(s) on {s.bus_text}")
-    return EXIT_OK
+    status = EXIT_OK
+    for nid, devs in devices.items():
+        for dev in devs:
+            for problem in dev.problems:
+                s.out(f"warning: node {nid} (unique id {dev.uid_hex}): {problem}")
+                status = EXIT_REFUSED
+        if len(devs) > 1:
+            _err(f"node id {nid} is used by {len(devs)} devices (unique ids "
+                 f"{', '.join(d.uid_hex for d in devs)}): their frames mix; give all but one "
+                 f"another id (pmactl --node {nid} params set sys.node_id N, then save and "
+                 f"restart them one at a time)")
+            status = EXIT_REFUSED
+    return status
+
+
+def cmd_info(s: Session) -> int:
+    dev = identity.device_info(s.node)
+    s.out(f"node {dev.node} on {s.bus_text}")
+    for line in _identity_lines(dev):
+        s.out(line)
+    return EXIT_REFUSED if dev.problems else EXIT_OK
 
 
 def cmd_status(s: Session) -> int:
     st = s.node.status()
     for line in _status_lines(st, s.bus_text):
         s.out(line)
-    return EXIT_OK
+    try:
+        dev = identity.device_info(s.node)
+    except NoReply as e:
+        s.out(f"  identity     none: {e}")
+        return EXIT_OK
+    for line in _identity_lines(dev):
+        s.out(line)
+    return EXIT_REFUSED if dev.problems else EXIT_OK
 
 
 def _matches(name: str, patterns: list[str]) -> bool:
@@ -656,7 +703,7 @@ PARAMS_COMMANDS: dict[str, Callable[[Session], int]] = {
     "dump": cmd_params_dump, "load": cmd_params_load,
 }
 COMMANDS: dict[str, Callable[[Session], int]] = {
-    "scan": cmd_scan, "status": cmd_status,
+    "scan": cmd_scan, "status": cmd_status, "info": cmd_info,
     "params": lambda s: PARAMS_COMMANDS[s.args.params_command](s),
     "arm": cmd_command, "disarm": cmd_command, "start": cmd_command, "stop": cmd_command,
     "clear-faults": cmd_command, "estop": cmd_estop, "controller": cmd_select,

@@ -25,7 +25,7 @@ from typing import Any, Callable, Iterable
 
 import can
 
-from pmactl.protocol import BASE_ID_MASK, TELEM_FRAMES, Param, Protocol, load_protocol, to_f32
+from pmactl.protocol import BASE_ID_MASK, BROADCASTS, TELEM_FRAMES, Param, Protocol, load_protocol, to_f32
 from pmactl.recording import COLUMNS, header_row
 
 TYPE_CODES = {"f32": 0, "u32": 1, "i32": 2}
@@ -125,7 +125,7 @@ def open_bus(cfg: dict[str, Any]) -> can.BusABC:
 
 
 # Messages a node sends: what a client listens to.
-NODE_REPLIES = ("COMMAND_ACK", "PARAM_RESP", "HEARTBEAT")
+NODE_REPLIES = ("COMMAND_ACK", "PARAM_RESP", "HEARTBEAT", "DEVICE_INFO")
 
 
 def frame_filters(proto: Protocol, messages: Iterable[str], node: int | None = None) -> list[dict[str, Any]]:
@@ -135,7 +135,7 @@ def frame_filters(proto: Protocol, messages: Iterable[str], node: int | None = N
     out: list[dict[str, Any]] = []
     for m in messages:
         base = proto.messages[m].frame_id
-        if m == "ESTOP_ALL":
+        if m in BROADCASTS:
             out.append({"can_id": base, "can_mask": 0x7FF, "extended": False})
         elif node is None:
             out.append({"can_id": base, "can_mask": BASE_ID_MASK, "extended": False})

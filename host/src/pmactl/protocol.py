@@ -7,8 +7,11 @@ from __future__ import annotations
 import functools
 import math
 import os
+import re
 import struct
 import tomllib
+import zlib
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -20,6 +23,8 @@ import cantools.database
 NODE_ID_MASK = 0x00F
 BASE_ID_MASK = 0x7F0
 NODE_COUNT = 16
+# Messages sent to every node at once: their frame id is the DBC's, without a node id.
+BROADCASTS = ("ESTOP_ALL", "DEVICE_INFO_REQ_ALL")
 
 # HEARTBEAT Flags bits (firmware/app/app.h PMA_HB_*, docs/protocol.md "Heartbeat flags");
 # the DBC has them only in a comment. host/tests check this table against app.h.
@@ -192,12 +197,13 @@ class Protocol:
         if not 0 <= node < NODE_COUNT:
             raise ValueError(f"node id {node} outside 0..15")
         base = self.messages[message].frame_id
-        return base if message == "ESTOP_ALL" else base | node
+        return base if message in BROADCASTS else base | node
 
     def message_of(self, frame_id: int) -> tuple[str, int] | None:
         """(message name, node id) of a received frame id, or None."""
-        if frame_id == self.messages["ESTOP_ALL"].frame_id:
-            return "ESTOP_ALL", -1
+        for name in BROADCASTS:
+            if name in self.messages and frame_id == self.messages[name].frame_id:
+                return name, -1
         try:
             m = self.db.get_message_by_frame_id(frame_id & BASE_ID_MASK)
         except KeyError:
@@ -230,6 +236,30 @@ class Protocol:
     def flag_names(flags: int) -> list[str]:
         """Names of the HEARTBEAT Flags bits that are set (unknown bits as BIT<n>)."""
         return [HEARTBEAT_FLAGS.get(b, f"BIT{b}") for b in range(16) if flags >> b & 1]
+
+
+def param_table_hash(rows: Iterable[Mapping[str, Any]]) -> int:
+    """CRC-32 of a parameter table: what a node reports as ParamTableHash (DEVICE_INFO page 2).
+
+    The one definition of the hash: tools/gen_protocol.py stamps it into the firmware
+    (PMA_PARAM_TABLE_HASH) from firmware/app/params.toml, and pmactl compares a node's with its
+    own table's. Over, for each parameter in id order: id, name, type, min, max, default (as
+    the table writes them; floats as float32), one line each, UTF-8."""
+    lines = []
+    for r in sorted(rows, key=lambda q: int(q["id"])):
+        def num(v: Any) -> str:
+            return repr(to_f32(float(v))) if r["type"] == "f32" else str(int(v))
+        lines.append(f"{int(r['id'])} {r['name']} {r['type']} {num(r['min'])} {num(r['max'])} "
+                     f"{num(r['default'])}\n")
+    return zlib.crc32("".join(lines).encode()) & 0xFFFFFFFF
+
+
+def protocol_version(db: cantools.database.can.Database) -> int:
+    """The protocol version of a DBC: the number of its VERSION line ("pma_proto N")."""
+    m = re.fullmatch(r"pma_proto (\d+)", (db.version or "").strip())
+    if m is None:
+        raise ValueError(f"the DBC's VERSION line is {db.version!r}, not 'pma_proto N'")
+    return int(m.group(1))
 
 
 @functools.cache

@@ -8,7 +8,7 @@
         .tim6 = TIM6, .adc1 = ADC1, .adc12_common = ADC12_COMMON, .dac1 = DAC1,                \
         .fdcan1 = FDCAN1, .fdcan_config = FDCAN_CONFIG,                                        \
         .mram = (volatile uint32_t *)SRAMCAN_BASE, .iwdg = IWDG, .nvic = NVIC,                 \
-        .nvm = G4_NVM_BASE,                                                                    \
+        .nvm = G4_NVM_BASE, .uid = (const volatile uint8_t *)UID_BASE,                         \
     }
 
 g4_io_t g4_io = G4_IO_HARDWARE;

@@ -29,6 +29,7 @@ typedef struct g4_io {
     IWDG_TypeDef *iwdg;
     NVIC_Type *nvic;
     uintptr_t nvm;        /* the first byte of the two parameter pages (flash memory itself) */
+    const volatile uint8_t *uid; /* the 96-bit unique device id (RM0440 48.1: UID_BASE) */
 } g4_io_t;
 
 extern g4_io_t g4_io;

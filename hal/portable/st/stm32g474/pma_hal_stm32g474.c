@@ -170,3 +170,8 @@ pma_reset_cause_t pma_hal_reset_cause(void)
     }
     return reset_cause;
 }
+
+void pma_hal_stm32g474_device_uid(uint8_t uid[PMA_HAL_STM32G474_UID_BYTES])
+{
+    for (unsigned k = 0; k < PMA_HAL_STM32G474_UID_BYTES; ++k) uid[k] = g4_io.uid[k];
+}

@@ -28,6 +28,13 @@ void pma_hal_stm32g474_led_set(int on);
  * failed (running at 16 MHz, nothing else is started). */
 int pma_hal_stm32g474_clock_source(void);
 
+/* Bytes of the factory-programmed unique device id (RM0440 48.1). */
+#define PMA_HAL_STM32G474_UID_BYTES 12u
+
+/* Copies the 96-bit unique device id, byte 0 (UID[7:0]) first: what DEVICE_INFO reports.
+ * Works before pma_hal_init(). */
+void pma_hal_stm32g474_device_uid(uint8_t uid[PMA_HAL_STM32G474_UID_BYTES]);
+
 /* Start-up (called by the reset handler before main): FPU already on,
  * reset cause latched, clock tree to 170 MHz, time base. */
 void pma_hal_stm32g474_system_init(void);
