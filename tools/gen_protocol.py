@@ -82,6 +82,9 @@ def load_params(path: Path = PARAMS) -> list[dict[str, Any]]:
                     raise TableError(f"{where}: not a {p['type']} integer")
         if "values" in p:
             p["values"] = {int(k): str(v) for k, v in p["values"].items()}
+        old = p.get("renamed_from", [])
+        if not isinstance(old, list) or not all(isinstance(n, str) and NAME_RE.match(n) for n in old):
+            raise TableError(f"{where}: renamed_from must be a list of earlier group.name names")
         p["field"] = p["name"].replace(".", "_")
     return sorted(params, key=lambda q: q["id"])
 

@@ -11,7 +11,7 @@ import can
 import pytest
 
 from fakenode import PROTO, STATE, UNKNOWN_ID, wait_until
-from pmactl import cli
+from pmactl import cli, paramfile
 from pmactl.cli import (EXIT_FILE, EXIT_INTERFACE, EXIT_NO_REPLY, EXIT_OK, EXIT_REFUSED, EXIT_USAGE,
                         main)
 
@@ -93,7 +93,8 @@ def test_scan_lists_every_node(pmactl, fake) -> None:
     r = pmactl("scan", "--seconds", "1.0")              # 20 heartbeat periods of the fakes
     assert r.code == EXIT_OK
     lines = r.out.splitlines()
-    assert lines[0].split() == ["node", "state", "fault", "controller", "reference", "flags"]
+    assert lines[0].split() == ["node", "state", "fault", "controller", "reference", "firmware",
+                                "unique", "id", "flags"]
     assert lines[1].split()[:5] == ["0", "IDLE", "NONE", "PPC", "HOLD"]
     assert lines[2].split()[:5] == ["5", "FAULT", "SENSOR_TIMEOUT", "PPC", "HOLD"]
     assert "2 node(s)" in lines[-1]
@@ -230,8 +231,12 @@ def test_dump_and_load_json(pmactl, fake, tmp_path: Path) -> None:
     assert doc["params"]["ppc.w1_cm"] == 0.2            # shortest text of the single
     assert doc["units"]["ppc.w1_cm"] == "cm"
     assert f"#{UNKNOWN_ID}" not in doc["params"]
-    # nothing differs: nothing sent
+    assert doc["firmware"]["param_table_hash"] == f"{paramfile.table_hash(PROTO):08x}"
+    # nothing differs: nothing sent (sys.node_id is never loaded unless asked)
     r = pmactl("params", "load", str(path))
+    assert r.code == EXIT_OK and "0 set, 15 unchanged, 0 rejected" in r.out
+    assert "sys.node_id not loaded (--with-node-id loads it)" in r.out
+    r = pmactl("params", "load", "--with-node-id", str(path))
     assert r.code == EXIT_OK and "0 set, 16 unchanged, 0 rejected" in r.out
     assert n.sets() == []
     doc["params"]["ppc.w1_cm"] = 0.3
@@ -242,10 +247,10 @@ def test_dump_and_load_json(pmactl, fake, tmp_path: Path) -> None:
     r = pmactl("params", "load", str(path))
     assert r.code == EXIT_OK
     assert "set ctrl.mode = MFAC (was PPC)" in r.out and "set ppc.w1_cm = 0.3 cm (was 0.2)" in r.out
-    assert "2 set, 14 unchanged, 0 rejected" in r.out
+    assert "2 set, 13 unchanged, 0 rejected" in r.out
     assert n.value("ctrl.mode") == 2
     r = pmactl("params", "load", "--all", str(path))
-    assert "16 set" in r.out
+    assert "15 set" in r.out
 
 
 def test_dump_to_stdout(pmactl, fake) -> None:

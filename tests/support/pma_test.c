@@ -10,7 +10,7 @@ __attribute__((weak)) void tearDown(void) {}
 
 void pma_test_failf(unsigned line, const char *fmt, ...)
 {
-    static char msg[PMA_TEST_MSG_CHARS]; /* static: the M0 has 6 KB of stack */
+    char msg[PMA_TEST_MSG_CHARS]; /* on the stack: the M0's 16 KB of RAM have no room for it */
     va_list ap;
     va_start(ap, fmt);
     (void)vsnprintf(msg, sizeof msg, fmt, ap);

@@ -31,8 +31,8 @@
 /** Size of the message buffer of pma_test_fail (longer messages are truncated). */
 #define PMA_TEST_MSG_CHARS 256
 
-/** Fails the current test at `line` with a printf-style message (formatted into a static
- *  buffer, so a long message costs no stack; pma_test.c). Use pma_test_fail(). */
+/** Fails the current test at `line` with a printf-style message (pma_test.c; formatted in a
+ *  function, so no call site inlines the buffer). Use pma_test_fail(). */
 void pma_test_failf(unsigned line, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 
 /** Fails the current test with a printf-style message, reported at the line of the call. */

@@ -168,6 +168,9 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("--dry-run", action="store_true", help="check the file and show what would change")
     q.add_argument("--all", action="store_true",
                    help="send every entry, also those the node already has")
+    q.add_argument("--with-node-id", action="store_true",
+                   help="also load sys.node_id (by default never: a file copied to another node "
+                        "must not give both one id)")
 
     for name, text in (("arm", "IDLE -> ARMED: the output holds the preset pressure"),
                        ("disarm", "ARMED or RUNNING -> IDLE: the safe output"),
@@ -458,16 +461,46 @@ def cmd_params_dump(s: Session) -> int:
     paramfile._kind(path)            # a bad file name fails before the bus is touched
     node = s.node
     values = node.values()
-    paramfile.write(path, s.proto, values, node.node)
+    try:
+        dev = identity.device_info(node)
+        firmware: dict[str, Any] | None = {
+            "version": dev.fw_text, "protocol_version": dev.protocol_version,
+            "param_table_hash": None if dev.param_table_hash is None
+            else f"{dev.param_table_hash:08x}", "unique_id": dev.uid_hex}
+    except NoReply:
+        firmware = None              # a firmware without DEVICE_INFO: values only
+    paramfile.write(path, s.proto, values, node.node, firmware)
     known = sum(1 for pid in values if pid in s.proto.by_id)
     if path != "-":
-        s.out(f"{known} parameters of node {node.node} written to {path}")
+        s.out(f"{known} parameters of node {node.node} written to {path}"
+              + ("" if firmware else " (the node sent no DEVICE_INFO: firmware not recorded)"))
     return EXIT_OK
 
 
+def _plan_lines(s: Session, plan: paramfile.LoadPlan) -> None:
+    if not plan.same_table:
+        s.out(f"the file is of another firmware ({plan.file_firmware or 'version not recorded'}"
+              f"; pmactl's table {paramfile.table_hash(s.proto):08x}): mapped by name")
+    for old, new in plan.renamed:
+        s.out(f"renamed {old} -> {new}")
+    for p, was, now in plan.clamped:
+        s.out(f"clamped {p.name} = {was} to {_value_unit(p, p.text(now))} (range {p.text(p.min)}.."
+              f"{p.text(p.max)})")
+    for why in plan.dropped:
+        s.out(f"dropped {why}")
+    if plan.lacking and not plan.same_table:
+        s.out(f"not in the file ({len(plan.lacking)}, they keep the node's values): "
+              + ", ".join(p.name for p in plan.lacking))
+    if plan.node_id_skipped:
+        s.out(f"{paramfile.NODE_ID_PARAM} not loaded (--with-node-id loads it)")
+
+
 def cmd_params_load(s: Session) -> int:
-    entries = paramfile.load(s.args.file, s.proto)
+    plan = paramfile.plan(s.args.file, paramfile.read(s.args.file), s.proto,
+                          with_node_id=s.args.with_node_id)
+    entries = plan.entries
     node = s.node
+    _plan_lines(s, plan)
     if s.args.dry_run:
         current = node.values([p.id for p, _ in entries])
         n = 0

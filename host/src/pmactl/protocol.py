@@ -87,6 +87,9 @@ class Param:
     access: str          # "live" | "stopped" | "idle"
     doc: str
     values: dict[int, str] = field(default_factory=dict)
+    # Names this parameter had in earlier firmware versions (params.toml `renamed_from`): a
+    # parameter file of such a version is mapped by them (pmactl params load).
+    renamed_from: tuple[str, ...] = ()
 
     def parse(self, text: str) -> float | int:
         """A value from user text: a number, or an enumeration value's name.
@@ -271,7 +274,8 @@ def load_protocol(dbc: str | None = None, params: str | None = None) -> Protocol
         rows = tomllib.load(f)["param"]
     plist = [Param(id=r["id"], name=r["name"], type=r["type"], unit=r["unit"], min=r["min"],
                    max=r["max"], default=r["default"], access=r["access"], doc=r["doc"],
-                   values={int(k): str(v) for k, v in r.get("values", {}).items()})
+                   values={int(k): str(v) for k, v in r.get("values", {}).items()},
+                   renamed_from=tuple(str(n) for n in r.get("renamed_from", ())))
              for r in rows]
     assert isinstance(db, cantools.database.can.Database)
     return Protocol(db=db, params=sorted(plist, key=lambda p: p.id))
