@@ -30,12 +30,29 @@ static uint64_t uid_bits(const pma_app_t *app, unsigned first, unsigned n)
     return v;
 }
 
+/* DeviceTag: CRC-8, polynomial 0x07 (x^8 + x^2 + x + 1), initial value 0, no reflection, of the
+ * unique id; in every page, so that interleaved pages of two devices on one node id part. */
+static uint8_t device_tag(const uint8_t *uid)
+{
+    uint8_t crc = 0;
+    for (unsigned k = 0; k < PMA_DEVICE_UID_BYTES; ++k) {
+        crc ^= uid[k];
+        for (unsigned b = 0; b < 8u; ++b) {
+            const unsigned shifted = (unsigned)crc << 1;
+            crc = (uint8_t)((crc & 0x80u) ? shifted ^ 0x07u : shifted);
+        }
+    }
+    return crc;
+}
+
 void pma_app_send_device_info(pma_app_t *app)
 {
+    const uint8_t tag = device_tag(app->plat.device_uid);
     for (uint8_t page = 0; page < PAGE_COUNT; ++page) {
         struct pma_proto_device_info_t m;
         memset(&m, 0, sizeof m);
         m.page = page;
+        m.device_tag = tag;
         switch (page) {
         case PAGE_VERSION:
             m.protocol_version = (uint8_t)PMA_PROTO_VERSION;
@@ -44,19 +61,19 @@ void pma_app_send_device_info(pma_app_t *app)
             m.fw_patch = pma_build_info.fw_patch;
             m.build_target = pma_build_info.build_target;
             m.build_flags = pma_build_info.build_flags;
-            m.param_count = (uint8_t)PMA_PARAM_COUNT;
             break;
         case PAGE_COMMIT:
             m.fw_commit = pma_build_info.fw_commit;
+            m.param_count = (uint8_t)PMA_PARAM_COUNT;
             break;
         case PAGE_PARAMS:
             m.param_table_hash = PMA_PARAM_TABLE_HASH;
             break;
         case PAGE_UID_LOW:
-            m.uid_low = uid_bits(app, 0u, 7u);
+            m.uid_low = uid_bits(app, 0u, 6u);
             break;
         default:
-            m.uid_high = uid_bits(app, 7u, 5u);
+            m.uid_high = uid_bits(app, 6u, 6u);
             break;
         }
         uint8_t d[8] = {0};

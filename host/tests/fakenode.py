@@ -17,6 +17,7 @@ from typing import Any, Callable
 
 import can
 
+from pmactl.identity import device_tag
 from pmactl.protocol import Param, load_protocol, param_table_hash, protocol_version, to_f32
 
 PROTO = load_protocol()
@@ -252,13 +253,14 @@ class FakeNode:
                    else self.info_protocol_version)
         table = param_table_hash({"id": p.id, "name": p.name, "type": p.type, "min": p.min,
                                   "max": p.max, "default": p.default} for p in PROTO.params)
+        tag = device_tag(self.uid)
         pages: list[dict[str, Any]] = [
             {"Page": 0, "ProtocolVersion": version, "FwMajor": 0, "FwMinor": 2, "FwPatch": 0,
-             "BuildTarget": 1, "BuildFlags": 0, "ParamCount": len(PROTO.params)},
-            {"Page": 1, "FwCommit": 0x1234ABCD},
-            {"Page": 2, "ParamTableHash": table},
-            {"Page": 3, "UidLow": int.from_bytes(self.uid[:7], "little")},
-            {"Page": 4, "UidHigh": int.from_bytes(self.uid[7:], "little")},
+             "BuildTarget": 1, "BuildFlags": 0, "DeviceTag": tag},
+            {"Page": 1, "FwCommit": 0x1234ABCD, "ParamCount": len(PROTO.params), "DeviceTag": tag},
+            {"Page": 2, "ParamTableHash": table, "DeviceTag": tag},
+            {"Page": 3, "UidLow": int.from_bytes(self.uid[:6], "little"), "DeviceTag": tag},
+            {"Page": 4, "UidHigh": int.from_bytes(self.uid[6:], "little"), "DeviceTag": tag},
         ]
         fid = PROTO.frame_id("DEVICE_INFO", self.node)
         for page in pages:

@@ -249,7 +249,7 @@ def test_dump_and_load_json(pmactl, fake, tmp_path: Path) -> None:
     assert "set ctrl.mode = MFAC (was PPC)" in r.out and "set ppc.w1_cm = 0.3 cm (was 0.2)" in r.out
     assert "2 set, 13 unchanged, 0 rejected" in r.out
     assert n.value("ctrl.mode") == 2
-    r = pmactl("params", "load", "--all", str(path))
+    r = pmactl("params", "load", "--send-all", str(path))
     assert "15 set" in r.out
 
 

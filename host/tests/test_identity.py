@@ -8,6 +8,7 @@ from pathlib import Path
 
 from fakenode import PROTO
 from pmactl.cli import EXIT_NO_REPLY, EXIT_OK, EXIT_REFUSED
+from pmactl.identity import device_tag
 from pmactl.protocol import param_table_hash, protocol_version
 
 REPO = Path(__file__).resolve().parents[2]
@@ -88,3 +89,10 @@ def test_param_table_hash_is_the_firmwares() -> None:
 def test_protocol_version_is_the_dbcs_version_line() -> None:
     header = (REPO / "firmware/protocol/generated/pma_proto_version.h").read_text()
     assert f"#define PMA_PROTO_VERSION {protocol_version(PROTO.db)}u" in header
+
+
+def test_device_tag_is_crc8_smbus() -> None:
+    assert device_tag(b"123456789") == 0xF4              # the CRC's check value
+    assert device_tag(bytes(12)) == 0
+    assert device_tag(bytes([0x10, 0x21, 0x32, 0x43, 0x54, 0x65, 0x76, 0x87, 0x98, 0xA9, 0xBA,
+                             0xCB])) == 0x99             # tests/app/test_app_identity.c's id

@@ -37,6 +37,11 @@ static unsigned step_pages(struct pma_proto_device_info_t pages[8])
     return n;
 }
 
+/* DeviceTag of `uid`: CRC-8/SMBUS (polynomial 0x07, initial value 0) of its 12 bytes, 0x99,
+ * from an independent implementation (pmactl.identity.device_tag; its check value of
+ * "123456789" is 0xF4, host/tests/test_identity.py). */
+#define UID_TAG 0x99u
+
 static void check_pages(const struct pma_proto_device_info_t p[5])
 {
     for (unsigned k = 0; k < 5u; ++k) TEST_ASSERT_EQUAL_INT(k, p[k].page); /* in page order */
@@ -47,12 +52,13 @@ static void check_pages(const struct pma_proto_device_info_t p[5])
     TEST_ASSERT_EQUAL_INT(pma_build_info.build_target, p[0].build_target);
     TEST_ASSERT_NOT_EQUAL(PMA_PROTO_DEVICE_INFO_BUILD_TARGET_UNKNOWN_CHOICE, p[0].build_target);
     TEST_ASSERT_EQUAL_INT(pma_build_info.build_flags, p[0].build_flags);
-    TEST_ASSERT_EQUAL_INT(PMA_PARAM_COUNT, p[0].param_count);
+    TEST_ASSERT_EQUAL_INT(PMA_PARAM_COUNT, p[1].param_count);
     TEST_ASSERT_EQUAL_HEX32(pma_build_info.fw_commit, p[1].fw_commit);
     TEST_ASSERT_EQUAL_HEX32(PMA_PARAM_TABLE_HASH, p[2].param_table_hash);
-    /* the 12 bytes, byte 0 least significant in UidLow, byte 7 in UidHigh */
-    TEST_ASSERT_EQUAL_HEX64(0x76655443322110ull, p[3].uid_low);
-    TEST_ASSERT_EQUAL_HEX64(0xCBBAA99887ull, p[4].uid_high);
+    /* the 12 bytes, byte 0 least significant in UidLow, byte 6 in UidHigh */
+    TEST_ASSERT_EQUAL_HEX64(0x655443322110ull, p[3].uid_low);
+    TEST_ASSERT_EQUAL_HEX64(0xCBBAA9988776ull, p[4].uid_high);
+    for (unsigned k = 0; k < 5u; ++k) TEST_ASSERT_EQUAL_HEX8(UID_TAG, p[k].device_tag);
 }
 
 static void test_request_is_answered_with_five_pages(void)
@@ -116,6 +122,7 @@ static void test_unknown_uid_reads_zero(void)
     TEST_ASSERT_EQUAL_INT(5, step_pages(p));
     TEST_ASSERT_EQUAL_HEX64(0, p[3].uid_low);
     TEST_ASSERT_EQUAL_HEX64(0, p[4].uid_high);
+    TEST_ASSERT_EQUAL_HEX8(0, p[0].device_tag); /* CRC-8 of zeros, initial value 0 */
 }
 
 int main(void)

@@ -4,6 +4,7 @@ its storage file), the broadcast request, a malformed request, and two devices o
 found by a scan."""
 from __future__ import annotations
 
+import re
 import subprocess
 from pathlib import Path
 
@@ -32,10 +33,14 @@ def test_device_info_reports_the_build_and_the_given_uid(firmware, proto: Protoc
              "default": p.default} for p in proto.params]
     assert dev.param_table_hash == param_table_hash(rows)
     assert dev.uid_hex == UID
-    head = subprocess.run(["git", "-C", str(REPO), "rev-parse", "--short=8", "HEAD"],
-                          capture_output=True, text=True)
-    if head.returncode == 0:   # built from this checkout (the build stamps the commit)
-        assert dev.commit_known and f"{dev.fw_commit:08x}" == head.stdout.strip()
+    # what the build stamped (cmake/PmaBuildInfo.cmake writes it beside the program's objects)
+    stamp = (FW_HOST.parents[2] / "app" / "pma_build_info.c").read_text()
+    m = re.search(r"\.fw_commit = (0x[0-9a-f]+|0)u", stamp)
+    assert m is not None
+    assert dev.fw_commit == int(m.group(1), 16 if m.group(1).startswith("0x") else 10)
+    f = re.search(r"\.build_flags = (\d+)u", stamp)
+    assert f is not None and dev.dirty == bool(int(f.group(1)) & 1)
+    assert dev.commit_known == (not int(f.group(1)) & 2)
 
 
 def test_the_uid_follows_the_storage_file(firmware, tmp_path: Path) -> None:
@@ -70,24 +75,73 @@ def test_wrong_length_request_is_dropped(firmware, bus: can.BusABC, proto: Proto
     assert identity.device_info(node).uid_hex == UID          # a valid one is still answered
 
 
+def wait_devices(client: PmaNode, node_id: int, n: int) -> None:
+    """Until n devices answer on node_id (the fixture waits for a heartbeat of the id, which
+    the first device already gives)."""
+    for _ in range(50):
+        if len(identity.discover(client, seconds=0.3).get(node_id, [])) >= n:
+            return
+    raise AssertionError(f"{n} devices never answered on node id {node_id}")
+
+
 def test_scan_finds_two_devices_on_one_node_id(firmware, bus: can.BusABC, proto: Protocol,
                                                tmp_path: Path) -> None:
     firmware(node=4, storage=tmp_path / "x.nvm", extra=["--uid", UID])
     firmware(node=4, storage=tmp_path / "y.nvm", extra=["--uid", "ff" * 12])
     firmware(node=6, storage=tmp_path / "z.nvm", extra=["--uid", "ee" * 12])
     client = PmaNode(bus, 0, proto, timeout_s=2.0)
+    wait_devices(client, 4, 2)
     found = identity.discover(client, seconds=1.0)
     assert sorted(d.uid_hex for d in found[4]) == sorted([UID, "ff" * 12])
     assert [d.uid_hex for d in found[6]] == ["ee" * 12]
     assert all(d.complete and not d.problems for devs in found.values() for d in devs)
 
 
-def test_pmactl_scan_reports_the_duplicate(firmware, tmp_path: Path,
+def test_pmactl_scan_reports_the_duplicate(firmware, bus: can.BusABC, proto: Protocol,
+                                           tmp_path: Path,
                                            capsys: pytest.CaptureFixture[str]) -> None:
     firmware(node=4, storage=tmp_path / "x.nvm", extra=["--uid", UID])
     firmware(node=4, storage=tmp_path / "y.nvm", extra=["--uid", "ff" * 12])
+    wait_devices(PmaNode(bus, 0, proto, timeout_s=2.0), 4, 2)
     code = cli.main(["--interface", "socketcan", "--channel", CHANNEL, "scan", "--seconds", "1"])
     out, err = capsys.readouterr()
     assert code == cli.EXIT_REFUSED, (out, err)
     assert "node id 4 is used by 2 devices" in err and UID in err
     assert UID in out and "ff" * 12 in out
+
+
+def test_pmactl_moves_a_node_to_another_id(bus: can.BusABC, proto: Protocol, tmp_path: Path,
+                                           capsys: pytest.CaptureFixture[str]) -> None:
+    """set, save, restart, verify: the node (started without --node, so its stored sys.node_id
+    counts) answers on the new id after its restart, with the same unique id."""
+    import threading
+
+    from hil.fw_process import FirmwareProcess
+
+    store = tmp_path / "move.nvm"
+    args = ["--storage", str(store), "--lockstep", "--watchdog-ms", "10000"]
+    fw = FirmwareProcess(tmp_path, args).start()
+    try:
+        PmaNode(bus, 0, proto, timeout_s=5.0).heartbeat(timeout_s=10.0)
+        codes: list[int] = []
+        t = threading.Thread(target=lambda: codes.append(cli.main(
+            ["--interface", "socketcan", "--channel", CHANNEL, "--node", "0", "node-id", "9",
+             "--wait", "60"])))
+        t.start()
+        watch = PmaNode(bus, 0, proto, timeout_s=2.0)
+        # the restart, once the new id is saved (PARAMS_CHANGED cleared after SET + SAVE)
+        saved = False
+        for _ in range(200):
+            st = watch.status(timeout_s=2.0)
+            if "PARAMS_CHANGED" not in st.flag_names and watch.get("sys.node_id") == 9:
+                saved = True
+                break
+        assert saved
+        fw.stop()
+        fw = FirmwareProcess(tmp_path, args).start()
+        t.join(90)
+        out, err = capsys.readouterr()
+        assert codes == [cli.EXIT_OK], (out, err)
+        assert "verified: the device" in out and "answers on node id 9" in out
+    finally:
+        fw.stop()

@@ -2051,6 +2051,7 @@ int pma_proto_device_info_pack(
     memset(&dst_p[0], 0, 8);
 
     dst_p[0] |= pack_left_shift_u8(src_p->page, 0u, 0xffu);
+    dst_p[7] |= pack_left_shift_u8(src_p->device_tag, 0u, 0xffu);
 
     switch (src_p->page) {
 
@@ -2061,7 +2062,6 @@ int pma_proto_device_info_pack(
         dst_p[4] |= pack_left_shift_u8(src_p->fw_patch, 0u, 0xffu);
         dst_p[5] |= pack_left_shift_u8(src_p->build_target, 0u, 0xffu);
         dst_p[6] |= pack_left_shift_u8(src_p->build_flags, 0u, 0xffu);
-        dst_p[7] |= pack_left_shift_u8(src_p->param_count, 0u, 0xffu);
         break;
 
     case 1:
@@ -2069,6 +2069,7 @@ int pma_proto_device_info_pack(
         dst_p[2] |= pack_right_shift_u32(src_p->fw_commit, 8u, 0xffu);
         dst_p[3] |= pack_right_shift_u32(src_p->fw_commit, 16u, 0xffu);
         dst_p[4] |= pack_right_shift_u32(src_p->fw_commit, 24u, 0xffu);
+        dst_p[5] |= pack_left_shift_u8(src_p->param_count, 0u, 0xffu);
         break;
 
     case 2:
@@ -2085,7 +2086,6 @@ int pma_proto_device_info_pack(
         dst_p[4] |= pack_right_shift_u64(src_p->uid_low, 24u, 0xffu);
         dst_p[5] |= pack_right_shift_u64(src_p->uid_low, 32u, 0xffu);
         dst_p[6] |= pack_right_shift_u64(src_p->uid_low, 40u, 0xffu);
-        dst_p[7] |= pack_right_shift_u64(src_p->uid_low, 48u, 0xffu);
         break;
 
     case 4:
@@ -2094,6 +2094,7 @@ int pma_proto_device_info_pack(
         dst_p[3] |= pack_right_shift_u64(src_p->uid_high, 16u, 0xffu);
         dst_p[4] |= pack_right_shift_u64(src_p->uid_high, 24u, 0xffu);
         dst_p[5] |= pack_right_shift_u64(src_p->uid_high, 32u, 0xffu);
+        dst_p[6] |= pack_right_shift_u64(src_p->uid_high, 40u, 0xffu);
         break;
 
     default:
@@ -2113,6 +2114,7 @@ int pma_proto_device_info_unpack(
     }
 
     dst_p->page = unpack_right_shift_u8(src_p[0], 0u, 0xffu);
+    dst_p->device_tag = unpack_right_shift_u8(src_p[7], 0u, 0xffu);
 
     switch (dst_p->page) {
 
@@ -2123,7 +2125,6 @@ int pma_proto_device_info_unpack(
         dst_p->fw_patch = unpack_right_shift_u8(src_p[4], 0u, 0xffu);
         dst_p->build_target = unpack_right_shift_u8(src_p[5], 0u, 0xffu);
         dst_p->build_flags = unpack_right_shift_u8(src_p[6], 0u, 0xffu);
-        dst_p->param_count = unpack_right_shift_u8(src_p[7], 0u, 0xffu);
         break;
 
     case 1:
@@ -2131,6 +2132,7 @@ int pma_proto_device_info_unpack(
         dst_p->fw_commit |= unpack_left_shift_u32(src_p[2], 8u, 0xffu);
         dst_p->fw_commit |= unpack_left_shift_u32(src_p[3], 16u, 0xffu);
         dst_p->fw_commit |= unpack_left_shift_u32(src_p[4], 24u, 0xffu);
+        dst_p->param_count = unpack_right_shift_u8(src_p[5], 0u, 0xffu);
         break;
 
     case 2:
@@ -2147,7 +2149,6 @@ int pma_proto_device_info_unpack(
         dst_p->uid_low |= unpack_left_shift_u64(src_p[4], 24u, 0xffu);
         dst_p->uid_low |= unpack_left_shift_u64(src_p[5], 32u, 0xffu);
         dst_p->uid_low |= unpack_left_shift_u64(src_p[6], 40u, 0xffu);
-        dst_p->uid_low |= unpack_left_shift_u64(src_p[7], 48u, 0xffu);
         break;
 
     case 4:
@@ -2156,6 +2157,7 @@ int pma_proto_device_info_unpack(
         dst_p->uid_high |= unpack_left_shift_u64(src_p[3], 16u, 0xffu);
         dst_p->uid_high |= unpack_left_shift_u64(src_p[4], 24u, 0xffu);
         dst_p->uid_high |= unpack_left_shift_u64(src_p[5], 32u, 0xffu);
+        dst_p->uid_high |= unpack_left_shift_u64(src_p[6], 40u, 0xffu);
         break;
 
     default:
@@ -2274,12 +2276,12 @@ float pma_proto_device_info_uid_low_decode(uint64_t value)
 
 bool pma_proto_device_info_uid_low_is_in_range(uint64_t value)
 {
-    return (value <= 72057594037927935ull);
+    return (value <= 281474976710655ull);
 }
 
 bool pma_proto_device_info_uid_low_is_in_phys_range(float value)
 {
-    return ((value >= 0.0f) && (value <= 7.205759403792794e+16f));
+    return ((value >= 0.0f) && (value <= 281474976710655.0f));
 }
 
 uint64_t pma_proto_device_info_uid_high_encode(float value)
@@ -2294,12 +2296,12 @@ float pma_proto_device_info_uid_high_decode(uint64_t value)
 
 bool pma_proto_device_info_uid_high_is_in_range(uint64_t value)
 {
-    return (value <= 1099511627775ull);
+    return (value <= 281474976710655ull);
 }
 
 bool pma_proto_device_info_uid_high_is_in_phys_range(float value)
 {
-    return ((value >= 0.0f) && (value <= 1099511627775.0f));
+    return ((value >= 0.0f) && (value <= 281474976710655.0f));
 }
 
 uint8_t pma_proto_device_info_fw_major_encode(float value)
@@ -2390,6 +2392,28 @@ bool pma_proto_device_info_build_target_is_in_phys_range(float value)
     return ((value >= 0.0f) && (value <= 255.0f));
 }
 
+uint8_t pma_proto_device_info_param_count_encode(float value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
+}
+
+float pma_proto_device_info_param_count_decode(uint8_t value)
+{
+    return ((float)value);
+}
+
+bool pma_proto_device_info_param_count_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool pma_proto_device_info_param_count_is_in_phys_range(float value)
+{
+    return ((value >= 0.0f) && (value <= 255.0f));
+}
+
 uint8_t pma_proto_device_info_build_flags_encode(float value)
 {
     return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
@@ -2412,24 +2436,24 @@ bool pma_proto_device_info_build_flags_is_in_phys_range(float value)
     return ((value >= 0.0f) && (value <= 255.0f));
 }
 
-uint8_t pma_proto_device_info_param_count_encode(float value)
+uint8_t pma_proto_device_info_device_tag_encode(float value)
 {
     return (uint8_t)(cantools_unsigned_from_double(roundf(value)));
 }
 
-float pma_proto_device_info_param_count_decode(uint8_t value)
+float pma_proto_device_info_device_tag_decode(uint8_t value)
 {
     return ((float)value);
 }
 
-bool pma_proto_device_info_param_count_is_in_range(uint8_t value)
+bool pma_proto_device_info_device_tag_is_in_range(uint8_t value)
 {
     (void)value;
 
     return (true);
 }
 
-bool pma_proto_device_info_param_count_is_in_phys_range(float value)
+bool pma_proto_device_info_device_tag_is_in_phys_range(float value)
 {
     return ((value >= 0.0f) && (value <= 255.0f));
 }

@@ -353,8 +353,9 @@ extern "C" {
 #define PMA_PROTO_DEVICE_INFO_FW_MINOR_NAME "FwMinor"
 #define PMA_PROTO_DEVICE_INFO_FW_PATCH_NAME "FwPatch"
 #define PMA_PROTO_DEVICE_INFO_BUILD_TARGET_NAME "BuildTarget"
-#define PMA_PROTO_DEVICE_INFO_BUILD_FLAGS_NAME "BuildFlags"
 #define PMA_PROTO_DEVICE_INFO_PARAM_COUNT_NAME "ParamCount"
+#define PMA_PROTO_DEVICE_INFO_BUILD_FLAGS_NAME "BuildFlags"
+#define PMA_PROTO_DEVICE_INFO_DEVICE_TAG_NAME "DeviceTag"
 
 /**
  * Signals in message ESTOP_ALL.
@@ -853,7 +854,7 @@ struct pma_proto_telem_e_t {
 /**
  * Signals in message DEVICE_INFO.
  *
- * Identity of the node, the reply to DEVICE_INFO_REQ and DEVICE_INFO_REQ_ALL: five frames, Page 0 to 4, sent at once. Page 0: the protocol version (the number in this file's VERSION line), the firmware version, the build target, the build flags and the number of parameters; 1: the firmware's git commit; 2: the parameter table's hash; 3 and 4: the device's 96-bit unique id.
+ * Identity of the node, the reply to DEVICE_INFO_REQ and DEVICE_INFO_REQ_ALL: five frames, Page 0 to 4, sent at once. Page 0: the protocol version (the number in this file's VERSION line), the firmware version, the build target and the build flags; 1: the firmware's git commit and the number of parameters; 2: the parameter table's hash; 3 and 4: the device's 96-bit unique id. Every page ends with DeviceTag, so that the pages of two devices on one node id can be told apart when they interleave.
  *
  * All signal values are as on the CAN bus.
  */
@@ -893,18 +894,18 @@ struct pma_proto_device_info_t {
     uint32_t param_table_hash;
 
     /**
-     * Bytes 0..6 of the 12-byte unique device id (byte 0 least significant). STM32: the 96-bit UID; host build: from --uid or derived from the storage file.
+     * Bytes 0..5 of the 12-byte unique device id (byte 0 least significant). STM32: the 96-bit UID; host build: from --uid or derived from the storage file.
      *
-     * Range: 0..72057594037927935 (0..72057594037927935 -)
+     * Range: 0..281474976710655 (0..281474976710655 -)
      * Scale: 1
      * Offset: 0
      */
     uint64_t uid_low;
 
     /**
-     * Bytes 7..11 of the 12-byte unique device id.
+     * Bytes 6..11 of the 12-byte unique device id.
      *
-     * Range: 0..1099511627775 (0..1099511627775 -)
+     * Range: 0..281474976710655 (0..281474976710655 -)
      * Scale: 1
      * Offset: 0
      */
@@ -939,6 +940,15 @@ struct pma_proto_device_info_t {
     uint8_t build_target;
 
     /**
+     * Number of parameters in the node's table.
+     *
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t param_count;
+
+    /**
      * Bit 0: built from a tree with uncommitted changes; bit 1: the git commit is unknown (FwCommit 0).
      *
      * Range: 0..255 (0..255 -)
@@ -948,13 +958,13 @@ struct pma_proto_device_info_t {
     uint8_t build_flags;
 
     /**
-     * Number of parameters in the node's table.
+     * CRC-8 (polynomial 0x07, initial value 0) of the 12-byte unique id, in every page: which device a page belongs to.
      *
      * Range: 0..255 (0..255 -)
      * Scale: 1
      * Offset: 0
      */
-    uint8_t param_count;
+    uint8_t device_tag;
 };
 
 /**
@@ -3861,6 +3871,46 @@ bool pma_proto_device_info_build_target_is_in_phys_range(float value);
  *
  * @return Encoded signal.
  */
+uint8_t pma_proto_device_info_param_count_encode(float value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+float pma_proto_device_info_param_count_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool pma_proto_device_info_param_count_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool pma_proto_device_info_param_count_is_in_phys_range(float value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
 uint8_t pma_proto_device_info_build_flags_encode(float value);
 
 /**
@@ -3901,7 +3951,7 @@ bool pma_proto_device_info_build_flags_is_in_phys_range(float value);
  *
  * @return Encoded signal.
  */
-uint8_t pma_proto_device_info_param_count_encode(float value);
+uint8_t pma_proto_device_info_device_tag_encode(float value);
 
 /**
  * Decode given signal by applying scaling and offset.
@@ -3910,7 +3960,7 @@ uint8_t pma_proto_device_info_param_count_encode(float value);
  *
  * @return Decoded signal.
  */
-float pma_proto_device_info_param_count_decode(uint8_t value);
+float pma_proto_device_info_device_tag_decode(uint8_t value);
 
 /**
  * Check that given signal is in allowed range.
@@ -3919,7 +3969,7 @@ float pma_proto_device_info_param_count_decode(uint8_t value);
  *
  * @return true if in range, false otherwise.
  */
-bool pma_proto_device_info_param_count_is_in_range(uint8_t value);
+bool pma_proto_device_info_device_tag_is_in_range(uint8_t value);
 
 /**
  * Check that given physical value is in allowed range before encoding.
@@ -3932,7 +3982,7 @@ bool pma_proto_device_info_param_count_is_in_range(uint8_t value);
  *
  * @return true if in range, false otherwise.
  */
-bool pma_proto_device_info_param_count_is_in_phys_range(float value);
+bool pma_proto_device_info_device_tag_is_in_phys_range(float value);
 
 /**
  * Pack message DEVICE_INFO_REQ.

@@ -66,12 +66,33 @@ def _common(p: argparse.ArgumentParser, suppress: bool) -> None:
     g.add_argument("--bitrate", "-b", type=int, default=d,
                    help="bit rate in bit/s for interfaces that set it (the protocol's is 1000000); "
                         "default: python-can's configuration")
-    g.add_argument("--node", "-n", type=_node_id, default=argparse.SUPPRESS if suppress else 0,
-                   help="node id 0..15 (default 0)")
+    g.add_argument("--node", "-n", type=_node_list, default=argparse.SUPPRESS if suppress else [0],
+                   metavar="ID[,ID...]",
+                   help="node id 0..15 (default 0), or a list (1,2,5; ranges: 1-3): the command "
+                        "runs on each, with a report per node")
+    g.add_argument("--all", "-a", action="store_true", default=argparse.SUPPRESS if suppress else False,
+                   help="every node on the bus (the ones whose heartbeat arrives within "
+                        "--timeout); estop: ESTOP_ALL")
     g.add_argument("--timeout", "-t", type=_positive, default=argparse.SUPPRESS if suppress else 1.0,
                    help="seconds to wait for a reply (default 1.0)")
     g.add_argument("--verbose", "-v", action="store_true", default=argparse.SUPPRESS if suppress else False,
                    help="show python-can's own log messages (warnings from the interface driver)")
+
+
+def _node_list(text: str) -> list[int]:
+    """'3', '1,2,5' or '0-3,7': distinct node ids 0..15, in the order given."""
+    out: list[int] = []
+    for part in text.split(","):
+        lo_text, dash, hi_text = part.strip().partition("-")
+        lo = _node_id(lo_text)
+        hi = _node_id(hi_text) if dash else lo
+        if hi < lo:
+            raise argparse.ArgumentTypeError(f"node range {part.strip()!r} runs backwards")
+        for n in range(lo, hi + 1):
+            if n in out:
+                raise argparse.ArgumentTypeError(f"node id {n} given twice in {text!r}")
+            out.append(n)
+    return out
 
 
 def _node_id(text: str) -> int:
@@ -166,7 +187,7 @@ def build_parser() -> argparse.ArgumentParser:
     q = padd("load", "set the parameters of a file; every entry is checked before any is sent")
     q.add_argument("file", metavar="FILE")
     q.add_argument("--dry-run", action="store_true", help="check the file and show what would change")
-    q.add_argument("--all", action="store_true",
+    q.add_argument("--send-all", action="store_true",
                    help="send every entry, also those the node already has")
     q.add_argument("--with-node-id", action="store_true",
                    help="also load sys.node_id (by default never: a file copied to another node "
@@ -178,8 +199,13 @@ def build_parser() -> argparse.ArgumentParser:
                        ("stop", "RUNNING -> ARMED"),
                        ("clear-faults", "FAULT -> IDLE: clear the latched fault")):
         add(name, text)
-    p = add("estop", "emergency stop: the node (or with --all every node) enters FAULT")
-    p.add_argument("--all", action="store_true", help="ESTOP_ALL: every node on the bus")
+    add("estop", "emergency stop: the node (or with --all every node, ESTOP_ALL) enters FAULT")
+    p = add("node-id", "move the node to another node id safely: checks that no device answers "
+                       "on NEW, sets and saves sys.node_id, waits for the node (same unique id) "
+                       "to come back on NEW after its restart")
+    p.add_argument("new_id", type=_node_id, metavar="NEW", help="the new node id, 0..15")
+    p.add_argument("--wait", type=_positive, default=60.0, metavar="S",
+                   help="how long to wait for the restarted node on NEW (default 60 s)")
     p = add("controller", "select the controller run by the next START (no NAME: show it)")
     p.add_argument("name", nargs="?", metavar="NAME", help="OFF, PPC, MFAC, PID or OPEN_LOOP")
     p = add("reference", "select the reference of the next START (no NAME: show it)")
@@ -243,18 +269,33 @@ class Session:
         self._bus: can.BusABC | None = None
         self._node: PmaNode | None = None
         self.cfg: dict[str, Any] | None = None
+        # the node id the command works on now (one of --node's, or of --all's)
+        self.node_id: int = args.node[0]
+
+    @property
+    def bus(self) -> can.BusABC:
+        if self._bus is None:
+            self.cfg = bus_config(self.args.interface, self.args.channel, self.args.bitrate)
+            self._bus = open_bus(self.cfg)
+        return self._bus
+
+    def use_node(self, node_id: int) -> None:
+        """The next commands go to node_id (same bus)."""
+        if node_id != self.node_id:
+            self.node_id = node_id
+            self._node = None
 
     @property
     def node(self) -> PmaNode:
         if self._node is None:
-            self.cfg = bus_config(self.args.interface, self.args.channel, self.args.bitrate)
-            self._bus = open_bus(self.cfg)
-            self._node = PmaNode(self._bus, self.args.node, self.proto, timeout_s=self.args.timeout)
+            self._node = PmaNode(self.bus, self.node_id, self.proto, timeout_s=self.args.timeout)
             # Only the frames the command needs: on a bus with a 1 kHz plant bridge a
             # client that takes every frame falls behind (record sets its own).
             cmd = self.args.command
             if cmd == "scan" or (cmd == "estop" and self.args.all):
                 self._node.listen_to(["HEARTBEAT", "DEVICE_INFO"], node=None)
+            elif cmd == "node-id":   # this node's replies, and every node's identity
+                self._node.listen_to(NODE_REPLIES, node=None)
             elif cmd == "monitor":
                 self._node.listen_to(["HEARTBEAT", "ESTOP", "ESTOP_ALL", "COMMAND", "COMMAND_ACK",
                                       "PARAM_RESP"], node=None)
@@ -457,7 +498,7 @@ def cmd_params_simple(s: Session) -> int:
 
 
 def cmd_params_dump(s: Session) -> int:
-    path = s.args.file
+    path = s.args.file.replace("{node}", str(s.node_id))
     paramfile._kind(path)            # a bad file name fails before the bus is touched
     node = s.node
     values = node.values()
@@ -510,7 +551,7 @@ def cmd_params_load(s: Session) -> int:
                 s.out(f"would set {p.name} = {_value_unit(p, p.text(value))} (now {p.text(current[p.id])})")
         s.out(f"{len(entries)} entries valid, {n} would change (dry run: nothing sent)")
         return EXIT_OK
-    report = node.load_values(entries, skip_unchanged=not s.args.all)
+    report = node.load_values(entries, skip_unchanged=not s.args.send_all)
     for p, old, new in report.changed:
         s.out(f"set {p.name} = {_value_unit(p, p.text(new))} (was {p.text(old)})")
     for e in report.rejected:
@@ -562,6 +603,43 @@ def cmd_estop(s: Session) -> int:
                       f"within {s.args.timeout:g} s")
     s.out(f"ESTOP_ALL sent: {len(seen)} node(s) in FAULT")
     return EXIT_OK
+
+
+def cmd_node_id(s: Session) -> int:
+    node = s.node
+    old, new = node.node, s.args.new_id
+    if new == old:
+        raise UsageError(f"node {old} already has id {new}")
+    dev = identity.device_info(node)
+    if dev.uid is None:
+        raise NodeStateError(f"node {old} reports no unique id: it could not be told from "
+                             f"another device on id {new} after the move")
+    others = identity.discover(node, seconds=min(1.0, s.args.timeout)).get(new, [])
+    if others:
+        raise NodeStateError(f"node id {new} is already used by the device(s) "
+                             f"{', '.join(d.uid_hex for d in others)}: nothing changed")
+    st = node.status()
+    if st.state_name not in ("IDLE", "FAULT"):
+        raise NodeStateError(f"node {old} is {st.state_name}: disarm it first (sys.node_id can "
+                             f"change only with the output inactive); nothing changed")
+    node.set("sys.node_id", new)
+    node.save()
+    s.out(f"node {old} (unique id {dev.uid_hex}): sys.node_id = {new} set and saved; restart the "
+          f"node now (power cycle or reset) to apply it")
+    deadline = time.monotonic() + s.args.wait
+    moved = PmaNode(node.bus, new, s.proto, timeout_s=s.args.timeout)
+    while time.monotonic() < deadline:
+        try:
+            found = identity.device_info(moved, timeout_s=min(1.0, s.args.timeout))
+        except NoReply:
+            continue
+        if found.uid == dev.uid:
+            s.out(f"verified: the device {dev.uid_hex} answers on node id {new}")
+            return EXIT_OK
+        raise NodeStateError(f"another device ({found.uid_hex}) answers on node id {new}")
+    raise NoReply(f"the device {dev.uid_hex} did not answer on node id {new} within "
+                  f"{s.args.wait:g} s (sys.node_id {new} is saved: it applies at its next start; "
+                  f"a pma-fw-host started with --node keeps that id)")
 
 
 def cmd_select(s: Session) -> int:
@@ -741,8 +819,10 @@ COMMANDS: dict[str, Callable[[Session], int]] = {
     "arm": cmd_command, "disarm": cmd_command, "start": cmd_command, "stop": cmd_command,
     "clear-faults": cmd_command, "estop": cmd_estop, "controller": cmd_select,
     "reference": cmd_select, "setpoint": cmd_setpoint, "record": cmd_record, "plot": cmd_plot,
-    "monitor": cmd_monitor,
+    "monitor": cmd_monitor, "node-id": cmd_node_id,
 }
+# Commands that work on one node (or on the whole bus) and so take no list of nodes.
+SINGLE_NODE = ("scan", "record", "plot", "monitor", "node-id")
 
 
 def _err(text: str) -> None:
@@ -768,6 +848,68 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     s = Session(args, out)
     try:
+        nodes = _nodes_of(s)
+    except UsageError as e:
+        _err(f"error: {e}")
+        s.close()
+        return EXIT_USAGE
+    except InterfaceError as e:
+        _err(f"error: {e}")
+        s.close()
+        return EXIT_INTERFACE
+    except NoReply as e:
+        _err(f"error: {e}")
+        s.close()
+        return EXIT_NO_REPLY
+    try:
+        if len(nodes) == 1:
+            s.use_node(nodes[0])
+            return _run_one(s)
+        worst = EXIT_OK
+        for n in nodes:
+            s.use_node(n)
+            s.out = (lambda line, n=n: out(f"node {n}: {line}"))  # type: ignore[misc]
+            code = _run_one(s)
+            if code == EXIT_INTERRUPTED:
+                return code
+            worst = max(worst, code)
+        s.out = out
+        out(f"{len(nodes)} node(s): " + ("all OK" if worst == EXIT_OK else f"exit status {worst}"))
+        return worst
+    finally:
+        s.close()
+
+
+def _nodes_of(s: Session) -> list[int]:
+    """The node ids of the command: --node's list, or with --all the nodes whose heartbeat
+    arrives within --timeout. A command of one node (or of the bus) takes one."""
+    args = s.args
+    if args.command == "estop" and args.all:
+        return [args.node[0]]                # ESTOP_ALL: one broadcast
+    if args.command in ("scan", "monitor", "plot") :
+        return [args.node[0]]
+    if args.all:
+        if args.command in SINGLE_NODE:
+            raise UsageError(f"{args.command} works on one node: --all does not apply")
+        probe = PmaNode(s.bus, 0, s.proto, timeout_s=args.timeout)
+        probe.listen_to(["HEARTBEAT"], node=None)
+        found = scan(probe, args.timeout)
+        if not found:
+            raise NoReply(f"--all: no node heartbeat on {s.bus_text} within {args.timeout:g} s")
+        return sorted(found)
+    if len(args.node) > 1 and args.command in SINGLE_NODE:
+        raise UsageError(f"{args.command} works on one node: give one --node")
+    if len(args.node) > 1 and args.command == "params" and args.params_command == "dump" \
+            and args.file != "-" and "{node}" not in args.file:
+        raise UsageError("params dump to several nodes needs a file name with {node} in it "
+                         "(e.g. node{node}.json)")
+    return list(args.node)
+
+
+def _run_one(s: Session) -> int:
+    """The command on s's current node, its exceptions turned into exit statuses."""
+    args = s.args
+    try:
         return COMMANDS[args.command](s)
     except UsageError as e:
         _err(f"error: {e}")
@@ -784,16 +926,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         p = e.param
         name = p.name if p else "?"
         kept = f"; {name} stays {p.text(e.current)}" if p is not None and e.current is not None else ""
-        _err(f"error: node {args.node} rejected set {name} = "
+        _err(f"error: node {s.node_id} rejected set {name} = "
              f"{p.text(e.requested) if p and e.requested is not None else '?'}: "
              f"{s.proto.status_text(e.code)}{kept}")
         return EXIT_REFUSED
     except CommandError as e:
         cmd = e.what.replace("command ", "")
-        _err(f"error: node {args.node} refused {cmd}: {s.proto.status_text(e.code)}")
+        _err(f"error: node {s.node_id} refused {cmd}: {s.proto.status_text(e.code)}")
         return EXIT_REFUSED
     except PmaError as e:
-        _err(f"error: node {args.node}: {e.what}: {s.proto.status_text(e.code)}")
+        _err(f"error: node {s.node_id}: {e.what}: {s.proto.status_text(e.code)}")
         return EXIT_REFUSED
     except NodeStateError as e:
         _err(f"error: {e}")
@@ -807,8 +949,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         _err("interrupted")
         return EXIT_INTERRUPTED
-    finally:
-        s.close()
+
+
 
 
 if __name__ == "__main__":

@@ -26,10 +26,22 @@ PAGE_BYTES = 8                 # DEVICE_INFO's DLC
 UID_BYTES = 12
 
 
+def device_tag(uid: bytes) -> int:
+    """DEVICE_INFO's DeviceTag of a unique id: CRC-8/SMBUS (polynomial 0x07, initial value 0,
+    no reflection, no final XOR) of its bytes."""
+    crc = 0
+    for byte in uid:
+        crc ^= byte
+        for _ in range(8):
+            crc = ((crc << 1) ^ 0x07) & 0xFF if crc & 0x80 else (crc << 1) & 0xFF
+    return crc
+
+
 @dataclass
 class DeviceInfo:
     """What one device said about itself (fields None until their page arrived)."""
     node: int
+    tag: int | None = None             # DeviceTag: which device of the node id
     protocol_version: int | None = None
     fw_version: tuple[int, int, int] | None = None
     build_target: str | None = None
@@ -52,7 +64,7 @@ class DeviceInfo:
         """The 12-byte unique id (byte 0 first), None until both pages arrived."""
         if self.uid_low is None or self.uid_high is None:
             return None
-        return self.uid_low.to_bytes(7, "little") + self.uid_high.to_bytes(5, "little")
+        return self.uid_low.to_bytes(6, "little") + self.uid_high.to_bytes(6, "little")
 
     @property
     def uid_hex(self) -> str:
@@ -86,10 +98,10 @@ class DeviceInfo:
 class InfoCollector:
     """Turns raw DEVICE_INFO frames into DeviceInfo per (node id, device).
 
-    Frames of one device arrive in page order (0..4) and the devices' replies may interleave on
-    the bus; a device is told from another on the same node id by its UID, known only at its
-    page 4, so pages are kept per node id in arrival order and a new Page 0 starts a new device
-    of that node id."""
+    The devices' replies may interleave on the bus; every page carries the device's DeviceTag
+    (a CRC-8 of its unique id), so pages are grouped per (node id, tag), and a repeated page
+    of a group starts a new device (two devices with equal tags, 1 in 256, that interleave are
+    then told apart by their UIDs only if their pages do not mix)."""
 
     def __init__(self, node: PmaNode) -> None:
         self.node = node
@@ -115,11 +127,13 @@ class InfoCollector:
             target.problems.append(f"a DEVICE_INFO frame of {len(data)} bytes (want "
                                    f"{PAGE_BYTES}): ignored")
             return
-        page = data[0]
-        if page == 0 or not devs or page in devs[-1].pages:
+        page, tag = data[0], data[7]
+        mine = [d for d in devs if d.tag == tag]
+        if not mine or page in mine[-1].pages:
             dev = self._new(nid)
+            dev.tag = tag
         else:
-            dev = devs[-1]
+            dev = mine[-1]
         if page >= PAGES:
             dev.problems.append(f"unknown DEVICE_INFO page {page}: ignored")
             return
@@ -144,9 +158,9 @@ class InfoCollector:
             flags = int(sig["BuildFlags"])
             dev.dirty = bool(flags & 1)
             dev.commit_known = not flags & 2
-            dev.param_count = int(sig["ParamCount"])
         elif page == 1:
             dev.fw_commit = int(sig["FwCommit"])
+            dev.param_count = int(sig["ParamCount"])
         elif page == 2:
             dev.param_table_hash = int(sig["ParamTableHash"])
             if dev.param_table_hash != self.my_hash:
@@ -158,6 +172,10 @@ class InfoCollector:
             dev.uid_low = int(sig["UidLow"])
         else:
             dev.uid_high = int(sig["UidHigh"])
+        uid = dev.uid
+        if uid is not None and device_tag(uid) != dev.tag:
+            dev.problems.append(f"DeviceTag {dev.tag:02x} is not the CRC-8 of the unique id "
+                                f"{uid.hex()} ({device_tag(uid):02x}): pages of two devices mixed?")
 
     def _new(self, nid: int) -> DeviceInfo:
         dev = DeviceInfo(node=nid)
