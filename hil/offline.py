@@ -625,6 +625,8 @@ def main(args: argparse.Namespace) -> int:
             if not 0 < args.duration <= 3600:
                 raise OptionError("--duration must be in (0, 3600] s")
             sc.duration_s = sc.quick_duration_s = float(args.duration)
+            if not sc.windows_for(sc.duration_s):   # shorter than every window: the whole run
+                sc.windows = [(0.0, sc.duration_s)]
         variants = build_variants(sc, _assignments(args.set, "--set"), _assignments(args.rig, "--rig"), args.grid)
     except (ScenarioError, OptionError) as e:
         print(f"hil offline: {e}", file=sys.stderr)
