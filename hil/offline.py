@@ -557,14 +557,19 @@ def build_variants(sc: Scenario, sets: list[tuple[str, str]], rigs: list[tuple[s
     for combo in itertools.product(*[vals for _, vals in axes]) if axes else [()]:
         fw, rg = list(base_fw), list(base_rig)
         settings: dict[str, Any] = {}
+        seed = sc.seed
         for (name, _), v in zip(axes, combo):
-            if name.startswith("rig:"):
+            if name == "seed":
+                if not isinstance(v, int):
+                    raise OptionError(f"--grid seed: {v!r} is not an integer")
+                seed = v
+            elif name.startswith("rig:"):
                 rg.append((name[4:], v))
             else:
                 fw.append((name, v))
             settings[name] = v
         label = " ".join(f"{k}={v}" for k, v in settings.items())
-        out.append(Variant(label, with_overrides(sc, fw, rg), settings))
+        out.append(Variant(label, replace(with_overrides(sc, fw, rg), seed=seed), settings))
     return out
 
 
@@ -597,7 +602,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--rig", action="append", metavar="PATH=VALUE",
                    help="rig parameter, a dotted RigParams path such as load.bias_force_n (repeatable)")
     p.add_argument("--grid", action="append", metavar="NAME=V1,V2,...",
-                   help="sweep a firmware parameter (or rig:PATH) over values; several: every combination")
+                   help="sweep a firmware parameter (or rig:PATH, or seed) over values; several: every combination")
     p.add_argument("--seed", type=int, help="the rig's sensor-noise seed (default: the scenario's)")
     p.add_argument("--jobs", type=int, default=1, metavar="N", help="worker processes (default 1)")
     p.add_argument("--out", metavar="DIR", help="write summary.json and signals.npz (per variant: DIR/variant_NN)")

@@ -36,14 +36,16 @@ TELEM_FIELDS = {
 class Recorder:
     """Per-lane signals at every tick, in preallocated arrays."""
 
-    FIELDS: ClassVar[dict[str, type]] = {"phase": np.int8, "run_step": np.int64, "counts": np.int32, "dac_counts": np.int32,
+    FIELDS: ClassVar[dict[str, type]] = {
+              "phase": np.int8, "run_step": np.int64, "counts": np.int32, "dac_counts": np.int32,
               "output_active": np.int8, "sample_status": np.int8, "x_true_cm": np.float64,
               "v_true_cm_s": np.float64, "x_meas_cm": np.float64, "p_kpa": np.float64,
               "p_cmd_kpa": np.float64, "load_mass_kg": np.float64, "disturbance_n": np.float64}
 
     def __init__(self, lanes: int, ticks: int) -> None:
         self.n = 0
-        self.data: list[dict[str, np.ndarray]] = [{k: np.zeros(ticks, dtype=t) for k, t in self.FIELDS.items()} for _ in range(lanes)]
+        self.data: list[dict[str, np.ndarray]] = [
+            {k: np.zeros(ticks, dtype=t) for k, t in self.FIELDS.items()} for _ in range(lanes)]
 
     def trimmed(self, lane: int) -> dict[str, np.ndarray]:
         return {k: v[:self.n] for k, v in self.data[lane].items()}
