@@ -16,7 +16,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from .metrics import lane_metrics
+from .metrics import lane_metrics, rmste
 from .reference import reference_function
 from .rig import Rig
 from .scenario import Controller, Scenario
@@ -138,6 +138,8 @@ def summarise(sc: Scenario, lanes: list[LaneResult], *, quick: bool, duration_s:
                          p_need[ok] if ok.sum() > 1 else None, t[sub][ok] if ok.sum() > 1 else None)
         m.final_state, m.final_fault_code = lane.state, lane.fault_code
         info.update(m.to_dict())
+        # the same windows on the rig's true position (the sensor's noise and quantisation left out)
+        info["rmste_true_cm"] = rmste(t, d["x_true_cm"][run] - xr, windows)
         info["reference_unreachable_samples"] = int((~ok).sum())
         summary["rmste"][label] = m.rmste_cm
         summary["max_abs_error_after_tu"][label] = m.max_abs_error_after_tu_cm
