@@ -23,7 +23,7 @@ import pytest
 from hil import offline
 from hil import scenario as scn
 from hil.fw_process import BUILD_HINT, FW_HOST
-from hil.runner import RunOptions, Runner
+from hil.runner import Runner, RunOptions
 from hil.summary import jsonable
 
 pytestmark = pytest.mark.skipif(not Path("/sys/class/net/vcan0").exists(),
