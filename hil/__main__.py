@@ -4,6 +4,7 @@
     python -m hil run SCENARIO --out DIR [--quick] [--interface I --channel C --bitrate B]
     python -m hil report DIR [DIR ...]
     python -m hil bench [--seconds S]
+    python -m hil offline SCENARIO [--quick] [--controller L] [--set N=V] [--rig P=V] [--grid N=V1,V2] [--jobs N]
 
 Exit status: 0 the run ended as the scenario expects; 1 it did not (or the run
 failed); 2 bad command line or scenario file; 3 CAN interface problem;
@@ -194,6 +195,14 @@ def main(argv: list[str] | None = None) -> int:
     b.add_argument("--out", default="build/hil-bench", help="work directory (default build/hil-bench)")
     can_opts(b)
 
+    o = sub.add_parser("offline", help="run a scenario without CAN: the firmware as a library (libpma_offline.so)",
+                       description="The scenario's lanes on the real firmware (the application, control library "
+                                   "and fake port as libpma_offline.so), stepped as over CAN; sweeps over "
+                                   "parameters and rig values. Exit status: 0 as expected, 1 not, 2 bad options, "
+                                   "3 the library is missing.")
+    from .offline import add_arguments
+    add_arguments(o)
+
     try:
         args = ap.parse_args(argv)
     except SystemExit as e:
@@ -207,6 +216,9 @@ def main(argv: list[str] | None = None) -> int:
         return cmd_run(args, argv)
     if args.cmd == "report":
         return cmd_report(args)
+    if args.cmd == "offline":
+        from .offline import main as offline_main
+        return offline_main(args)
     return cmd_bench(args, argv)
 
 

@@ -24,39 +24,27 @@ figures of merit to summary.json (hil/metrics.py).
 """
 from __future__ import annotations
 
-import json
 import math
 import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 import can
-import numpy as np
 
 from pmactl.client import NoReply, PmaError, PmaNode, frame_filters
 
-from .fw_process import FW_HOST, BUILD_HINT, FirmwareProcess
-from .metrics import lane_metrics
-from .reference import reference_function
+from .fw_process import BUILD_HINT, FW_HOST, FirmwareProcess
 from .rig import Rig
 from .scenario import Controller, Scenario, protocol
+from .summary import PHASE_ARMED, PHASE_IDLE, PHASE_RUNNING, TELEM_FIELDS, LaneResult, Recorder, summarise
 
 REPLY_TIMEOUT_S = 10.0
 LOCKSTEP_WATCHDOG_MS = 10000  # pma-fw-host --watchdog-ms for HIL nodes (wall time; see _start_firmware)
 STOP_FILE = "STOP"  # created in the output directory: stop the run cleanly (Ctrl-C from outside the guest)
-PHASE_IDLE, PHASE_ARMED, PHASE_RUNNING = 0, 1, 2
 BOARD_HEARTBEAT_WAIT_S = 10.0   # --board: how long to wait for the board's first heartbeat
 SAMPLE_REPEATED = 1     # PLANT_ACTUATOR.Sample: the tick used the previous sample again (DBC)
-TELEM_FIELDS = {  # (message, signal) -> name in the recording
-    ("TELEM_A", "TimeMs"): "time_ms", ("TELEM_A", "XCm"): "x_cm",
-    ("TELEM_B", "XrCm"): "xr_cm", ("TELEM_B", "ECm"): "e_cm",
-    ("TELEM_C", "U"): "u", ("TELEM_C", "VCmS"): "v_cm_s",
-    ("TELEM_D", "Internal1"): "internal1", ("TELEM_D", "Internal2"): "internal2",
-    ("TELEM_E", "PressureKpa"): "pressure_kpa", ("TELEM_E", "CtrlFlags"): "ctrl_flags",
-    ("TELEM_E", "Breaches"): "breaches",
-}
 
 
 class RunError(RuntimeError):
@@ -100,22 +88,6 @@ class RunOptions:
     # fails: in lockstep a node answers at once, but the vcan guest's one CPU, on a busy
     # host, can hold it back for seconds; a dead node is found at once (_check_alive)
     reply_timeout_s: float = REPLY_TIMEOUT_S
-
-
-class Recorder:
-    """Per-lane signals at every tick, in preallocated arrays."""
-
-    FIELDS = {"phase": np.int8, "run_step": np.int64, "counts": np.int32, "dac_counts": np.int32,
-              "output_active": np.int8, "sample_status": np.int8, "x_true_cm": np.float64,
-              "v_true_cm_s": np.float64, "x_meas_cm": np.float64, "p_kpa": np.float64,
-              "p_cmd_kpa": np.float64, "load_mass_kg": np.float64, "disturbance_n": np.float64}
-
-    def __init__(self, lanes: int, ticks: int) -> None:
-        self.n = 0
-        self.data = [{k: np.zeros(ticks, dtype=t) for k, t in self.FIELDS.items()} for _ in range(lanes)]
-
-    def trimmed(self, lane: int) -> dict[str, np.ndarray]:
-        return {k: v[:self.n] for k, v in self.data[lane].items()}
 
 
 class Progress:
@@ -545,132 +517,16 @@ class Runner:
     # ------------------------------------------------------------- results --
     def _summarise(self, final: dict[int, tuple[str, str, int, int]], duration: float,
                    wall_s: float) -> dict[str, Any]:
-        sc = self.sc
-        windows = sc.windows_for(duration)
         rec: Recorder | None = getattr(self, "rec", None)
-        xr_fn = reference_function(sc.reference)
-        arrays: dict[str, np.ndarray] = {}
-        lanes_out: dict[str, Any] = {}
-        summary: dict[str, Any] = {
-            "scenario": sc.name, "title": sc.title, "file": str(sc.path) if sc.path else None,
-            "quick": self.opts.quick, "duration_s": duration, "period_s": self.period_s,
-            "windows": [list(w) for w in windows], "paper": sc.paper,
-            "rmste": {}, "max_abs_error_after_tu": {}, "constraint_violations": {}, "barrier_breaches": {},
-            "fault_code": {}, "state": {}, "start_result": {}, "controllers": lanes_out,
-            "expect": {"state": sc.expect.state, "fault_code": sc.expect.fault_code,
-                       "start_result": sc.expect.start_result},
-            "interrupted": self.interrupted, "errors": self.errors, "benchmark": self.bench,
-            "wall_s": wall_s, "bus_log": f"bus.{self.opts.log_format}", "signals": "signals.npz",
-        }
-        band = sc.band_cm()
-        needed = static_pressure_for(sc)
+        lanes = []
         for lane in self.lanes:
-            label = lane.ctrl.label
             state, fault, dac, active = final.get(lane.index, (lane.state, lane.fault_code, 0, 0))
-            summary["fault_code"][label] = fault
-            summary["state"][label] = state
-            summary["start_result"][label] = lane.start_result
-            info: dict[str, Any] = {"mode": lane.ctrl.mode, "node": lane.node, "description": lane.ctrl.description,
-                                    "params_set": lane.params, "params_read_back": lane.params_read_back,
-                                    "final_dac_counts": dac, "final_output_active": active}
-            if rec is None or rec.n == 0:
-                lanes_out[label] = info
-                continue
-            d = rec.trimmed(lane.index)
-            for k, v in d.items():
-                arrays[f"{label}__{k}"] = v
-            telem = {k: np.asarray(v, dtype=float) for k, v in lane.telem.items()}
-            if "time_ms" in telem:
-                telem["t_s"] = telem["time_ms"] / 1000.0
-            for k, v in telem.items():
-                arrays[f"{label}__telem_{k}"] = v
-            scale = lane.rig.params.firmware_scaling()
-            x_meas = scale["adc.offset_cm"] + scale["adc.gain_cm_per_count"] * d["counts"].astype(float)
-            arrays[f"{label}__x_meas_cm"] = x_meas
-            run = d["run_step"] >= 0
-            t = d["run_step"][run] * self.period_s
-            xr = xr_fn(t)
-            e = x_meas[run] - xr
-            arrays[f"{label}__t_s"] = t
-            arrays[f"{label}__xr_cm"] = xr
-            arrays[f"{label}__e_cm"] = e
-            info["reference_check_max_abs_cm"] = self._reference_check(telem, d["run_step"][run], xr_fn, x_meas[run])
-            if self.opts.board:
-                info["board_repeated_ticks"] = lane.repeated_ticks
-            if len(t) == 0:
-                lanes_out[label] = info
-                continue
-            # the static pressure the reference needs (every 10 ms), for the chattering ratio
-            sub = slice(None, None, max(1, round(0.01 / self.period_s)))
-            p_need = needed(xr[sub])
-            ok = np.isfinite(p_need)
-            m = lane_metrics(label, lane.ctrl.mode, t, e, x_meas[run], d["x_true_cm"][run], d["v_true_cm_s"][run],
-                             d["p_cmd_kpa"][run], windows, band, sc.t_u_s(lane.ctrl),
-                             sc.w1_cm(lane.ctrl) if lane.ctrl.mode == "PPC" else None,
-                             telem if "t_s" in telem else None,
-                             p_need[ok] if ok.sum() > 1 else None, t[sub][ok] if ok.sum() > 1 else None)
-            m.final_state, m.final_fault_code = state, fault
-            info.update(m.to_dict())
-            info["reference_unreachable_samples"] = int((~ok).sum())
-            summary["rmste"][label] = m.rmste_cm
-            summary["max_abs_error_after_tu"][label] = m.max_abs_error_after_tu_cm
-            summary["constraint_violations"][label] = m.constraint_violations
-            summary["barrier_breaches"][label] = m.barrier_breaches
-            lanes_out[label] = info
-        ok = (not self.errors and not self.interrupted and all(
-            summary["state"].get(c.label) == sc.expect.state and summary["fault_code"].get(c.label) == sc.expect.fault_code
-            and summary["start_result"].get(c.label) == sc.expect.start_result for c in sc.controllers))
-        summary["expect_met"] = ok
-        if arrays:
-            np.savez_compressed(self.out / "signals.npz", **arrays)
-        (self.out / "summary.json").write_text(json.dumps(_jsonable(summary), indent=2) + "\n")
-        return summary
-
-    def _reference_check(self, telem: dict[str, np.ndarray], steps: np.ndarray,
-                         xr_fn: Callable[[np.ndarray], np.ndarray], x_meas: np.ndarray) -> float | None:
-        """max |x_r(harness) - x_r(firmware, TELEM_B)| over the telemetry samples, and a
-        RunError-worthy note when the firmware's x (TELEM_A) is not the harness's
-        measured x at the same tick (the time bases disagree). steps: the run step of each
-        recorded sample (0, 1, 2, ... in lockstep; a board's ticks without a new sample
-        are skipped, and they used the sample before)."""
-        if "t_s" not in telem or not len(telem["t_s"]) or not len(steps):
-            return None
-        tick = np.round(telem["t_s"] / self.period_s).astype(np.int64)
-        idx = np.searchsorted(steps, tick, side="right") - 1     # the sample that tick used
-        ok = (idx >= 0) & (tick <= steps[-1])
-        if not ok.any():
-            return None
-        idx = idx[ok]
-        dx = np.abs(telem["x_cm"][ok] - x_meas[idx])
-        if float(np.max(dx)) > 1e-4:
-            self.errors.append(f"telemetry x differs from the harness's measured x by {float(np.max(dx)):.3g} cm: "
-                               "the time bases disagree")
-        # x_r at the telemetry's own tick (on a repeated tick, later than the sample's)
-        return float(np.max(np.abs(telem["xr_cm"][ok] - xr_fn(tick[ok] * self.period_s))))
-
-
-def static_pressure_for(sc: Scenario) -> Callable[[np.ndarray], np.ndarray]:
-    """x [cm] -> the steady pressure command [kPa] that holds it on the scenario's rig
-    (static curve without friction, initial load; NaN where 0..p_max does not reach)."""
-    rig = Rig(sc.rig_params(), seed=sc.seed)
-    p = np.linspace(45.0, rig.params.regulator.p_max_kpa, 1000)
-    x = np.array([rig.static_x_cm(float(v)) for v in p])
-    order = np.argsort(x)
-
-    def f(xq: np.ndarray) -> np.ndarray:
-        out = np.interp(xq, x[order], p[order])
-        out[(xq < x.min()) | (xq > x.max())] = math.nan
-        return out
-    return f
-
-
-def _jsonable(o: Any) -> Any:
-    if isinstance(o, dict):
-        return {str(k): _jsonable(v) for k, v in o.items()}
-    if isinstance(o, (list, tuple)):
-        return [_jsonable(v) for v in o]
-    if isinstance(o, (np.floating, float)):
-        return None if not math.isfinite(float(o)) else float(o)
-    if isinstance(o, (np.integer,)):
-        return int(o)
-    return o
+            lanes.append(LaneResult(
+                ctrl=lane.ctrl, node=lane.node, rig=lane.rig, params=lane.params,
+                params_read_back=lane.params_read_back, state=state, fault_code=fault,
+                start_result=lane.start_result, final_dac=dac, final_active=active,
+                data=rec.trimmed(lane.index) if rec is not None and rec.n > 0 else None, telem=lane.telem,
+                repeated_ticks=lane.repeated_ticks if self.opts.board else None))
+        return summarise(self.sc, lanes, quick=self.opts.quick, duration_s=duration, period_s=self.period_s,
+                         errors=self.errors, interrupted=self.interrupted, benchmark=self.bench, wall_s=wall_s,
+                         out=self.out, extra={"bus_log": f"bus.{self.opts.log_format}", "signals": "signals.npz"})

@@ -2,9 +2,10 @@
 # All tests, from a fresh Debian 12 / Ubuntu machine: set-up, then every
 # preset's CTest suite (Unity; host with ASan/UBSan; Cortex-M4F, M3, M0 under QEMU),
 # the generated code's freshness, the Python tests (numpy golden reference,
-# protocol and DBC consistency), the hil/with-vcan tests, the integration
-# tests of pma-fw-host over vcan, the HIL acceptance tests (the paper's
-# experiments over vcan), the main job's quick variant, the HIL benchmark, and a
+# protocol and DBC consistency, the offline runs' library layer), the
+# hil/with-vcan tests, the integration tests of pma-fw-host over vcan, the HIL
+# acceptance tests (the paper's experiments over vcan), an offline run against
+# the same run over vcan, the main job's quick variant, the HIL benchmark, and a
 # bounded libFuzzer run of the CAN frame handler. Exits non-zero on any failure.
 # Prints each stage's duration at the end (also when a stage fails).
 set -euo pipefail
@@ -45,7 +46,7 @@ for p in host cortex-m4f cortex-m3 cortex-m0; do
   stage "ctest $p" ctest --preset "$p" -j2
 done
 stage "pytest (no CAN)" .venv/bin/python -m pytest -q tests/golden tests/protocol \
-  hil/tests/test_rig.py hil/tests/test_scenarios.py
+  hil/tests/test_rig.py hil/tests/test_scenarios.py hil/tests/test_offline.py
 stage "hil/with-vcan" bash hil/tests/test_with_vcan.sh
 stage "pmactl unit tests (python-can virtual bus, no CAN)" \
   .venv/bin/python -m pytest -q host/tests --ignore=host/tests/integration
@@ -53,6 +54,8 @@ stage "integration tests over vcan (pma-fw-host, python-can, can-utils, pmactl)"
   hil/with-vcan .venv/bin/python -m pytest -q tests/integration host/tests/integration
 stage "HIL acceptance over vcan (the paper's Cases 1-3, MFAC, PID, load change, constraint, faults)" \
   hil/with-vcan .venv/bin/python -m pytest -q hil/tests/test_hil_acceptance.py
+stage "offline (libpma_offline.so) vs lockstep HIL over vcan: Case 3 quick, identical figures and signals" \
+  hil/with-vcan .venv/bin/python -m pytest -q hil/tests/test_offline_vs_hil.py
 stage "the README's main job, quick variant (Case 3, first 30 s, PPC vs MFAC)" \
   env OUT=build/hil/ci-quick bash tools/run-demo.sh --quick --no-progress
 stage "HIL lockstep benchmark (printed, never asserted)" \

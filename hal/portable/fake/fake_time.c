@@ -10,6 +10,8 @@ static struct {
     bool tick_running;
     uint32_t tick_period_us;
     uint64_t next_tick_us;       /* the next tick boundary not yet served */
+    bool lockstep;               /* pma_fake_tick_lockstep() */
+    bool granted;                /* lockstep: the next pma_hal_tick_wait() ticks */
     /* watchdog */
     bool wd_running;
     bool wd_expired;
@@ -27,12 +29,27 @@ void pma_fake_set_reset_cause_(pma_reset_cause_t cause)
 void pma_fake_time_reset_(pma_fake_reset_depth_t depth)
 {
     t.tick_running = false;
+    t.granted = false;
     if (depth >= PMA_FAKE_RESET_RESTART) {
         t.wd_running = false;
         t.wd_expired = false;
         t.reset_cause = t.next_cause;
     }
-    if (depth >= PMA_FAKE_RESET_ALL) t.now_us = 0;
+    if (depth >= PMA_FAKE_RESET_ALL) {
+        t.now_us = 0;
+        t.lockstep = false;
+    }
+}
+
+void pma_fake_tick_lockstep(bool on)
+{
+    t.lockstep = on;
+    t.granted = false;
+}
+
+void pma_fake_tick_grant(void)
+{
+    t.granted = true;
 }
 
 static void watchdog_check(void)
@@ -67,6 +84,14 @@ int pma_hal_tick_start(uint32_t period_us)
 int pma_hal_tick_wait(uint32_t *late_ticks)
 {
     if (!pma_fake_initialised() || !t.tick_running) return PMA_ERR_NOT_READY;
+    if (t.lockstep) {
+        if (late_ticks != NULL) *late_ticks = 0;
+        if (!t.granted) return PMA_ERR_EMPTY;
+        t.granted = false;
+        if (t.now_us < t.next_tick_us) pma_fake_time_advance_us(t.next_tick_us - t.now_us);
+        t.next_tick_us = t.now_us + t.tick_period_us;
+        return PMA_OK;
+    }
     uint64_t late = 0;
     if (t.now_us < t.next_tick_us) {
         pma_fake_time_advance_us(t.next_tick_us - t.now_us); /* sleep until the tick */

@@ -63,6 +63,15 @@ bool pma_fake_initialised(void);
 void pma_fake_time_advance_us(uint64_t dt_us);
 /* pma_hal_tick_wait() sleeps by advancing the clock to the next tick. */
 
+/* Lockstep, as a port that ticks on received sensor frames (the Linux port's
+ * --lockstep): while on, pma_hal_tick_wait() ticks only once per
+ * pma_fake_tick_grant() (the clock advanced to the next tick boundary as
+ * above, never late); without a grant it returns PMA_ERR_EMPTY at once and no
+ * time passes (a loop iteration that only handles frames). Off after
+ * pma_fake_reset(); a grant not yet used is dropped by pma_hal_init(). */
+void pma_fake_tick_lockstep(bool on);
+void pma_fake_tick_grant(void);
+
 /* -------------------------------------------------------------- watchdog -- */
 
 /* True once the clock went more than the timeout past the last kick (or the

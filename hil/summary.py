@@ -1,0 +1,208 @@
+"""A run's results: the per-tick recording, and summary.json built from it.
+
+Shared by the two ways of running a scenario, so that they report the same
+figures from the same signals: over CAN (hil/runner.py, pma-fw-host or a board)
+and offline (hil/offline.py, the same firmware as a shared library). The figures
+themselves are hil/metrics.py's.
+"""
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, ClassVar
+
+import numpy as np
+
+from .metrics import lane_metrics, rmste
+from .reference import reference_function
+from .rig import Rig
+from .scenario import Controller, Scenario
+
+PHASE_IDLE, PHASE_ARMED, PHASE_RUNNING = 0, 1, 2
+# (message, signal) -> name in the recording of the firmware's telemetry
+TELEM_FIELDS = {
+    ("TELEM_A", "TimeMs"): "time_ms", ("TELEM_A", "XCm"): "x_cm",
+    ("TELEM_B", "XrCm"): "xr_cm", ("TELEM_B", "ECm"): "e_cm",
+    ("TELEM_C", "U"): "u", ("TELEM_C", "VCmS"): "v_cm_s",
+    ("TELEM_D", "Internal1"): "internal1", ("TELEM_D", "Internal2"): "internal2",
+    ("TELEM_E", "PressureKpa"): "pressure_kpa", ("TELEM_E", "CtrlFlags"): "ctrl_flags",
+    ("TELEM_E", "Breaches"): "breaches",
+}
+
+
+class Recorder:
+    """Per-lane signals at every tick, in preallocated arrays."""
+
+    FIELDS: ClassVar[dict[str, type]] = {
+              "phase": np.int8, "run_step": np.int64, "counts": np.int32, "dac_counts": np.int32,
+              "output_active": np.int8, "sample_status": np.int8, "x_true_cm": np.float64,
+              "v_true_cm_s": np.float64, "x_meas_cm": np.float64, "p_kpa": np.float64,
+              "p_cmd_kpa": np.float64, "load_mass_kg": np.float64, "disturbance_n": np.float64}
+
+    def __init__(self, lanes: int, ticks: int) -> None:
+        self.n = 0
+        self.data: list[dict[str, np.ndarray]] = [
+            {k: np.zeros(ticks, dtype=t) for k, t in self.FIELDS.items()} for _ in range(lanes)]
+
+    def trimmed(self, lane: int) -> dict[str, np.ndarray]:
+        return {k: v[:self.n] for k, v in self.data[lane].items()}
+
+
+@dataclass
+class LaneResult:
+    """What one lane (controller, node, rig) of a run left: its end and its signals."""
+    ctrl: Controller
+    node: int
+    rig: Rig
+    params: dict[str, float | int]                      # the parameters set, in order
+    params_read_back: dict[str, float | int]
+    state: str
+    fault_code: str
+    start_result: str
+    final_dac: int
+    final_active: int
+    data: dict[str, np.ndarray] | None                  # Recorder.trimmed(); None: nothing recorded
+    telem: dict[str, list[float]] = field(default_factory=dict)
+    repeated_ticks: int | None = None                   # --board only
+
+
+def summarise(sc: Scenario, lanes: list[LaneResult], *, quick: bool, duration_s: float, period_s: float,
+              errors: list[str], interrupted: bool, benchmark: dict[str, Any], wall_s: float,
+              out: Path | None, extra: dict[str, Any] | None = None) -> dict[str, Any]:
+    """summary.json (docs/hil.md) of a run; with out, written there with signals.npz. A telemetry
+    check that fails (the firmware's x is not the harness's) is appended to errors."""
+    windows = sc.windows_for(duration_s)
+    xr_fn = reference_function(sc.reference)
+    arrays: dict[str, np.ndarray] = {}
+    lanes_out: dict[str, Any] = {}
+    summary: dict[str, Any] = {
+        "scenario": sc.name, "title": sc.title, "file": str(sc.path) if sc.path else None,
+        "quick": quick, "duration_s": duration_s, "period_s": period_s,
+        "windows": [list(w) for w in windows], "paper": sc.paper,
+        "rmste": {}, "max_abs_error_after_tu": {}, "constraint_violations": {}, "barrier_breaches": {},
+        "fault_code": {}, "state": {}, "start_result": {}, "controllers": lanes_out,
+        "expect": {"state": sc.expect.state, "fault_code": sc.expect.fault_code,
+                   "start_result": sc.expect.start_result},
+        "interrupted": interrupted, "errors": errors, "benchmark": benchmark,
+        "wall_s": wall_s, **(extra or {}),
+    }
+    band = sc.band_cm()
+    needed = static_pressure_for(sc)
+    for lane in lanes:
+        label = lane.ctrl.label
+        summary["fault_code"][label] = lane.fault_code
+        summary["state"][label] = lane.state
+        summary["start_result"][label] = lane.start_result
+        info: dict[str, Any] = {"mode": lane.ctrl.mode, "node": lane.node, "description": lane.ctrl.description,
+                                "params_set": lane.params, "params_read_back": lane.params_read_back,
+                                "final_dac_counts": lane.final_dac, "final_output_active": lane.final_active}
+        d = lane.data
+        if d is None or len(d["counts"]) == 0:
+            lanes_out[label] = info
+            continue
+        for k, v in d.items():
+            arrays[f"{label}__{k}"] = v
+        telem = {k: np.asarray(v, dtype=float) for k, v in lane.telem.items()}
+        if "time_ms" in telem:
+            telem["t_s"] = telem["time_ms"] / 1000.0
+        for k, v in telem.items():
+            arrays[f"{label}__telem_{k}"] = v
+        scale = lane.rig.params.firmware_scaling()
+        x_meas = scale["adc.offset_cm"] + scale["adc.gain_cm_per_count"] * d["counts"].astype(float)
+        arrays[f"{label}__x_meas_cm"] = x_meas
+        run = d["run_step"] >= 0
+        t = d["run_step"][run] * period_s
+        xr = xr_fn(t)
+        e = x_meas[run] - xr
+        arrays[f"{label}__t_s"] = t
+        arrays[f"{label}__xr_cm"] = xr
+        arrays[f"{label}__e_cm"] = e
+        info["reference_check_max_abs_cm"] = reference_check(telem, d["run_step"][run], xr_fn, x_meas[run],
+                                                             period_s, errors)
+        if lane.repeated_ticks is not None:
+            info["board_repeated_ticks"] = lane.repeated_ticks
+        if len(t) == 0:
+            lanes_out[label] = info
+            continue
+        # the static pressure the reference needs (every 10 ms), for the chattering ratio
+        sub = slice(None, None, max(1, round(0.01 / period_s)))
+        p_need = needed(xr[sub])
+        ok = np.isfinite(p_need)
+        m = lane_metrics(label, lane.ctrl.mode, t, e, x_meas[run], d["x_true_cm"][run], d["v_true_cm_s"][run],
+                         d["p_cmd_kpa"][run], windows, band, sc.t_u_s(lane.ctrl),
+                         sc.w1_cm(lane.ctrl) if lane.ctrl.mode == "PPC" else None,
+                         telem if "t_s" in telem else None,
+                         p_need[ok] if ok.sum() > 1 else None, t[sub][ok] if ok.sum() > 1 else None)
+        m.final_state, m.final_fault_code = lane.state, lane.fault_code
+        info.update(m.to_dict())
+        # the same windows on the rig's true position (the sensor's noise and quantisation left out)
+        info["rmste_true_cm"] = rmste(t, d["x_true_cm"][run] - xr, windows)
+        info["reference_unreachable_samples"] = int((~ok).sum())
+        summary["rmste"][label] = m.rmste_cm
+        summary["max_abs_error_after_tu"][label] = m.max_abs_error_after_tu_cm
+        summary["constraint_violations"][label] = m.constraint_violations
+        summary["barrier_breaches"][label] = m.barrier_breaches
+        lanes_out[label] = info
+    ok_all = (not errors and not interrupted and all(
+        summary["state"].get(c.label) == sc.expect.state and summary["fault_code"].get(c.label) == sc.expect.fault_code
+        and summary["start_result"].get(c.label) == sc.expect.start_result for c in sc.controllers))
+    summary["expect_met"] = ok_all
+    if out is not None:
+        out.mkdir(parents=True, exist_ok=True)
+        if arrays:
+            np.savez_compressed(out / "signals.npz", **arrays)  # type: ignore[arg-type]
+        (out / "summary.json").write_text(json.dumps(jsonable(summary), indent=2) + "\n")
+    return summary
+
+
+def reference_check(telem: dict[str, np.ndarray], steps: np.ndarray, xr_fn: Callable[[np.ndarray], np.ndarray],
+                    x_meas: np.ndarray, period_s: float, errors: list[str]) -> float | None:
+    """max |x_r(harness) - x_r(firmware, TELEM_B)| over the telemetry samples, and an error
+    appended when the firmware's x (TELEM_A) is not the harness's measured x at the same tick
+    (the time bases disagree). steps: the run step of each recorded sample (0, 1, 2, ... in
+    lockstep; a board's ticks without a new sample are skipped, and they used the sample before)."""
+    if "t_s" not in telem or not len(telem["t_s"]) or not len(steps):
+        return None
+    tick = np.round(telem["t_s"] / period_s).astype(np.int64)
+    idx = np.searchsorted(steps, tick, side="right") - 1     # the sample that tick used
+    ok = (idx >= 0) & (tick <= steps[-1])
+    if not ok.any():
+        return None
+    idx = idx[ok]
+    dx = np.abs(telem["x_cm"][ok] - x_meas[idx])
+    if float(np.max(dx)) > 1e-4:
+        errors.append(f"telemetry x differs from the harness's measured x by {float(np.max(dx)):.3g} cm: "
+                      "the time bases disagree")
+    # x_r at the telemetry's own tick (on a repeated tick, later than the sample's)
+    return float(np.max(np.abs(telem["xr_cm"][ok] - xr_fn(tick[ok] * period_s))))
+
+
+def static_pressure_for(sc: Scenario) -> Callable[[np.ndarray], np.ndarray]:
+    """x [cm] -> the steady pressure command [kPa] that holds it on the scenario's rig
+    (static curve without friction, initial load; NaN where 0..p_max does not reach)."""
+    rig = Rig(sc.rig_params(), seed=sc.seed)
+    p = np.linspace(45.0, rig.params.regulator.p_max_kpa, 1000)
+    x = np.array([rig.static_x_cm(float(v)) for v in p])
+    order = np.argsort(x)
+
+    def f(xq: np.ndarray) -> np.ndarray:
+        out = np.interp(xq, x[order], p[order])
+        out[(xq < x.min()) | (xq > x.max())] = math.nan
+        return out
+    return f
+
+
+def jsonable(o: Any) -> Any:
+    """o with numpy scalars as Python numbers and non-finite floats as None (JSON null)."""
+    if isinstance(o, dict):
+        return {str(k): jsonable(v) for k, v in o.items()}
+    if isinstance(o, (list, tuple)):
+        return [jsonable(v) for v in o]
+    if isinstance(o, (np.floating, float)):
+        return None if not math.isfinite(float(o)) else float(o)
+    if isinstance(o, (np.integer,)):
+        return int(o)
+    return o
