@@ -36,6 +36,7 @@ import can
 import numpy as np
 
 from pmactl.client import NoReply, PmaError, PmaNode, frame_filters
+from pmactl.nodedbc import write_node_dbc
 
 from .fw_process import FW_HOST, BUILD_HINT, FirmwareProcess
 from .metrics import lane_metrics
@@ -85,6 +86,9 @@ class Lane:
     telem: dict[str, list[float]] = field(default_factory=dict)
     telem_row: dict[str, float] = field(default_factory=dict)
     params_read_back: dict[str, float | int] = field(default_factory=dict)  # every parameter, after configuring
+
+
+BUS_DBC = "bus.dbc"     # the DBC of the run's nodes (pmactl.nodedbc), beside the bus log
 
 
 @dataclass
@@ -194,6 +198,8 @@ class Runner:
         for n in nodes:
             filters += frame_filters(self.proto, msgs, n)
         self.bus.set_filters(filters)
+        # the DBC of these nodes beside the bus log: any DBC viewer decodes the log with it
+        write_node_dbc(self.out / BUS_DBC, nodes, self.proto)
         rp = self.sc.rig_params()
         for i, (ctrl, node) in enumerate(zip(self.sc.controllers, nodes)):
             client = PmaNode(self.bus, node, self.proto, timeout_s=self.opts.reply_timeout_s)
@@ -560,7 +566,7 @@ class Runner:
             "expect": {"state": sc.expect.state, "fault_code": sc.expect.fault_code,
                        "start_result": sc.expect.start_result},
             "interrupted": self.interrupted, "errors": self.errors, "benchmark": self.bench,
-            "wall_s": wall_s, "bus_log": f"bus.{self.opts.log_format}", "signals": "signals.npz",
+            "wall_s": wall_s, "bus_log": f"bus.{self.opts.log_format}", "bus_dbc": BUS_DBC, "signals": "signals.npz",
         }
         band = sc.band_cm()
         needed = static_pressure_for(sc)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import difflib
 import fnmatch
+import importlib.metadata
 import json
 import logging
 import math
@@ -21,6 +22,7 @@ from pmactl import paramfile
 from pmactl.client import (NODE_REPLIES, CommandError, InterfaceError, MonitorEvent, BusMonitor, NodeStateError,
                            NoReply, ParamInfo, PmaError, PmaNode, RecordProgress, SetRejected,
                            Status, TelemetryRecorder, bus_config, describe_bus, open_bus, scan)
+from pmactl.nodedbc import NodeListError, node_dbc_text, parse_nodes, write_node_dbc
 from pmactl.protocol import Param, Protocol, load_protocol
 from pmactl.recording import RecordingError, metrics, read_recording
 
@@ -84,6 +86,13 @@ def _node_id(text: str) -> int:
     return v
 
 
+def _node_list(text: str) -> list[int]:
+    try:
+        return parse_nodes(text)
+    except NodeListError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
+
+
 def _positive(text: str) -> float:
     try:
         v = float(text)
@@ -114,6 +123,16 @@ def _finite(text: str) -> float:
     return v
 
 
+def version_text() -> str:
+    """'pmactl X (protocol N, DBC "VERSION")': the tool's version and the protocol's."""
+    try:
+        tool = importlib.metadata.version("pmactl")
+    except importlib.metadata.PackageNotFoundError:
+        tool = "(not installed)"
+    proto = load_protocol()
+    return f'pmactl {tool} (protocol {proto.version}, DBC VERSION "{proto.db.version}")'
+
+
 def build_parser() -> argparse.ArgumentParser:
     fmt = argparse.RawDescriptionHelpFormatter
     parser = argparse.ArgumentParser(
@@ -121,6 +140,8 @@ def build_parser() -> argparse.ArgumentParser:
         description="Tune, command and watch PMA controller nodes over CAN "
                     "(protocol: firmware/protocol/pma_proto.dbc, parameters: docs/parameters.md).",
         epilog=EXIT_CODES_HELP)
+    parser.add_argument("--version", action="version", version=version_text(),
+                        help="the tool's version and the protocol version it speaks, and exit")
     _common(parser, suppress=False)
     common = argparse.ArgumentParser(add_help=False)
     _common(common, suppress=True)
@@ -214,6 +235,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--dpi", type=_count, default=150, help="resolution (default 150)")
     p.add_argument("--no-panels", action="store_true",
                    help="only PREFIX.png (all panels), not one PNG per panel")
+
+    p = add("dbc", "write a DBC of the protocol for every node given: each node's messages at "
+                   "their frame ids (NAME_N<node>), for cantools, SavvyCAN and other viewers")
+    p.add_argument("--nodes", type=_node_list, default=list(range(16)), metavar="LIST",
+                   help="node ids: 0-15 (the default), 1,2,5 or 0-3,8")
+    p.add_argument("-o", "--output", metavar="FILE", default="-",
+                   help="the DBC file to write (default '-': stdout)")
 
     p = add("monitor", "heartbeats and faults of every node, live, until Ctrl-C")
     p.add_argument("--seconds", type=_positive, help="stop after this long")
@@ -625,6 +653,24 @@ def cmd_plot(s: Session) -> int:
     return EXIT_OK
 
 
+def cmd_dbc(s: Session) -> int:
+    nodes: list[int] = s.args.nodes
+    if s.args.output == "-":
+        sys.stdout.write(node_dbc_text(nodes, s.proto))
+        sys.stdout.flush()
+        return EXIT_OK
+    path = Path(s.args.output)
+    if not path.parent.exists():
+        raise UsageError(f"{path}: directory {path.parent} does not exist")
+    try:
+        write_node_dbc(path, nodes, s.proto)
+    except OSError as e:
+        raise paramfile.ParamFileError(str(path), [f"cannot write: {e.strerror or e}"]) from None
+    s.out(f"{path}: protocol {s.proto.version} for node(s) {','.join(map(str, nodes))} "
+          f"({len(s.proto.db.messages) - 1} messages per node, ESTOP_ALL once)")
+    return EXIT_OK
+
+
 def cmd_monitor(s: Session) -> int:
     node = s.node
     if s.args.host_heartbeat:
@@ -661,7 +707,7 @@ COMMANDS: dict[str, Callable[[Session], int]] = {
     "arm": cmd_command, "disarm": cmd_command, "start": cmd_command, "stop": cmd_command,
     "clear-faults": cmd_command, "estop": cmd_estop, "controller": cmd_select,
     "reference": cmd_select, "setpoint": cmd_setpoint, "record": cmd_record, "plot": cmd_plot,
-    "monitor": cmd_monitor,
+    "monitor": cmd_monitor, "dbc": cmd_dbc,
 }
 
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 import functools
 import math
 import os
+import re
 import struct
 import tomllib
 from dataclasses import dataclass, field
@@ -173,6 +174,14 @@ class Protocol:
         self.fault_names: dict[int, str] = self._choices("HEARTBEAT", "FaultCode")
         self.state_names: dict[int, str] = self._choices("HEARTBEAT", "State")
         self.commands: dict[str, int] = {v: k for k, v in self._choices("COMMAND", "Command").items()}
+
+    @property
+    def version(self) -> str:
+        """The protocol version the DBC describes: the number of its VERSION string
+        ("pma_proto 1" -> "1"); the whole string when it has no such form."""
+        text = (self.db.version or "").strip()
+        m = re.fullmatch(r"pma_proto\s+(\S+)", text)
+        return m.group(1) if m else text
 
     def _choices(self, msg: str, sig: str) -> dict[int, str]:
         choices = self.messages[msg].get_signal_by_name(sig).choices or {}
