@@ -74,6 +74,7 @@ class FakeNode:
     wire_break_at_tick: int | None = None   # RUNNING: fault SENSOR_WIRE_BREAK after this many ticks
     overrides: dict[str, dict[str, Any]] = field(default_factory=dict)  # name -> {"max": ...}
     params: tuple[str, ...] = DEFAULT_PARAMS
+    motion: str = "approach"         # telemetry: "approach" (x settles on x_r) or "sine" (x_r a 2 s sine)
 
     def __post_init__(self) -> None:
         self.rows: dict[int, Row] = {}
@@ -168,8 +169,12 @@ class FakeNode:
     def _telemetry(self) -> None:
         self.telem_ticks += 1
         t = self.telem_ticks * self.telem_s
-        xr = -1.5
-        x = xr + 0.5 * math.exp(-t / 0.2)
+        if self.motion == "sine":
+            xr = -1.5 + 0.5 * math.sin(2 * math.pi * t / 2.0)
+            x = xr + 0.1 * math.cos(2 * math.pi * t / 2.0)
+        else:
+            xr = -1.5
+            x = xr + 0.5 * math.exp(-t / 0.2)
         e = x - xr
         u = -40.0 * e
         mask = int(self.value("telem.mask"))

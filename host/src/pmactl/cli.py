@@ -236,6 +236,29 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-panels", action="store_true",
                    help="only PREFIX.png (all panels), not one PNG per panel")
 
+    p = add("scope", "live view of running nodes' telemetry: x and x_r, e with +-w1, u, pressure, over "
+                     "a rolling window; keys: space pause, r record (CSV as record's), s save PNG, q quit")
+    p.add_argument("--nodes", type=_node_list, metavar="LIST",
+                   help="the nodes to show: 1,2,5 or 0-3 (default: --node)")
+    p.add_argument("--window", type=_positive, default=10.0, metavar="S",
+                   help="rolling window in s (default 10)")
+    p.add_argument("--fps", type=_positive, default=30.0, help="redraws per second (default 30)")
+    p.add_argument("--w1", type=_positive, metavar="CM",
+                   help="the +-w1 band on e (default: each PPC node's ppc.w1_cm)")
+    p.add_argument("--host-heartbeat", action="store_true",
+                   help="send HOST_HEARTBEAT to the nodes (keeps them RUNNING without record/monitor)")
+    p.add_argument("--csv", metavar="CSV",
+                   help="recording file (several nodes: CSV's stem + _n<node>); default "
+                        "scope-<date>-<time>.csv when r is pressed")
+    p.add_argument("--record", action="store_true", help="record from the start")
+    p.add_argument("--seconds", type=_positive, help="stop after this long")
+    p.add_argument("--frames", type=_count, help="stop after this many frames drawn")
+    p.add_argument("--headless", action="store_true",
+                   help="no window: render with Agg and write each frame as PNG (--out, --frames)")
+    p.add_argument("--out", metavar="PREFIX", default="scope",
+                   help="headless: writes PREFIX_0001.png, ... (default scope)")
+    p.add_argument("--dpi", type=_count, default=80, help="resolution (default 80)")
+
     p = add("dbc", "write a DBC of the protocol for every node given: each node's messages at "
                    "their frame ids (NAME_N<node>), for cantools, SavvyCAN and other viewers")
     p.add_argument("--nodes", type=_node_list, default=list(range(16)), metavar="LIST",
@@ -279,7 +302,7 @@ class Session:
             elif cmd == "monitor":
                 self._node.listen_to(["HEARTBEAT", "ESTOP", "ESTOP_ALL", "COMMAND", "COMMAND_ACK",
                                       "PARAM_RESP"], node=None)
-            elif cmd != "record":
+            elif cmd not in ("record", "scope"):
                 self._node.listen_to(NODE_REPLIES)
         return self._node
 
@@ -671,6 +694,37 @@ def cmd_dbc(s: Session) -> int:
     return EXIT_OK
 
 
+def cmd_scope(s: Session) -> int:
+    from pmactl.scope import Scope, ScopeError, ScopeOptions
+    a = s.args
+    nodes: list[int] = a.nodes or [a.node]
+    if a.headless and a.frames is None and a.seconds is None:
+        raise UsageError("--headless needs --frames N or --seconds S (it writes a PNG per frame)")
+    csv_path = Path(a.csv) if a.csv else None
+    out = Path(a.out)
+    for path in (csv_path, out if a.headless else None):
+        if path is not None and not path.parent.exists():
+            raise UsageError(f"{path}: directory {path.parent} does not exist")
+    opts = ScopeOptions(nodes=nodes, window_s=a.window, fps=a.fps, w1_cm=a.w1,
+                        host_heartbeat=a.host_heartbeat, csv=csv_path, record=a.record,
+                        seconds=a.seconds, frames=a.frames, headless=a.headless, png_prefix=out,
+                        dpi=a.dpi)
+    scope = Scope(s.node, opts, out=s.out)
+    try:
+        summary = scope.run()
+    except ScopeError as e:
+        raise UsageError(str(e)) from None
+    s.out(f"scope: {summary.frames} frames in {summary.elapsed_s:.1f} s ({summary.fps:.1f} frames/s, "
+          f"{summary.recent_fps:.1f} over the last 50; {summary.full_draws} full redraws): "
+          f"{summary.stop_reason}")
+    for n, rows in summary.rows.items():
+        rec = f", {summary.recorded[n]} recorded" if summary.recorded.get(n) else ""
+        s.out(f"  node {n}: {rows} telemetry rows shown{rec}")
+    if not any(summary.rows.values()) and not any(summary.recorded.values()):
+        raise NoReply(f"no telemetry from node(s) {','.join(map(str, nodes))} (are they RUNNING?)")
+    return EXIT_OK
+
+
 def cmd_monitor(s: Session) -> int:
     node = s.node
     if s.args.host_heartbeat:
@@ -707,7 +761,7 @@ COMMANDS: dict[str, Callable[[Session], int]] = {
     "arm": cmd_command, "disarm": cmd_command, "start": cmd_command, "stop": cmd_command,
     "clear-faults": cmd_command, "estop": cmd_estop, "controller": cmd_select,
     "reference": cmd_select, "setpoint": cmd_setpoint, "record": cmd_record, "plot": cmd_plot,
-    "monitor": cmd_monitor, "dbc": cmd_dbc,
+    "monitor": cmd_monitor, "dbc": cmd_dbc, "scope": cmd_scope,
 }
 
 

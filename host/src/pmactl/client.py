@@ -26,7 +26,7 @@ from typing import Any, Callable, Iterable
 import can
 
 from pmactl.protocol import BASE_ID_MASK, TELEM_FRAMES, Param, Protocol, load_protocol, to_f32
-from pmactl.recording import COLUMNS, header_row
+from pmactl.recording import COLUMNS, header_row, row_cells
 
 TYPE_CODES = {"f32": 0, "u32": 1, "i32": 2}
 TYPE_SIGNALS = {0: "ValueF32", 1: "ValueU32", 2: "ValueI32"}
@@ -992,21 +992,7 @@ class TelemetryRecorder:
 
     @staticmethod
     def _write(w: Any, row: TelemetryRow, rx_rel: float) -> None:
-        cells: list[str] = []
-        for col in COLUMNS:
-            if col.key == "rx_time":
-                cells.append(f"{rx_rel:.6f}")
-                continue
-            v = row.values.get(col.key)
-            if v is None:
-                cells.append("")
-            elif col.key == "t":
-                cells.append(f"{float(v):.3f}")
-            elif isinstance(v, float):
-                cells.append(f"{v:.9g}")
-            else:
-                cells.append(str(int(v)))
-        w.writerow(cells)
+        w.writerow(row_cells(row.values, rx_rel))
 
     def _write_meta(self, summary: RecordSummary, controller: str | None,
                     labels: tuple[tuple[str, str], tuple[str, str]]) -> None:

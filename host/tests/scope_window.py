@@ -1,0 +1,44 @@
+"""Runs `pmactl scope` in a real window against a fake node, for test_scope.py: the fake
+node (fakenode.py, x_r a 2 s sine) RUNNING on a virtual bus in this process, the scope
+through pmactl's command line, and two screenshots of the X display (PIL.ImageGrab)
+taken after frames FIRST and FIRST + GAP, counted in frames drawn, not in seconds.
+
+    python scope_window.py OUT_DIR FIRST GAP        (DISPLAY names the X server)
+"""
+from __future__ import annotations
+
+import json
+import os
+import sys
+import uuid
+from pathlib import Path
+
+from PIL import ImageGrab
+
+from fakenode import FakeNode
+from pmactl import scope
+from pmactl.cli import main
+
+
+def run(out: Path, first: int, gap: int) -> int:
+    shots = {first + 1: out / "shot1.png", first + gap + 1: out / "shot2.png"}
+    stats: dict[str, object] = {}
+
+    def hook(sc: scope.Scope, frames: int) -> None:
+        # the frame before this one has gone through Tk's event loop to the X server
+        if frames in shots:
+            ImageGrab.grab(xdisplay=os.environ["DISPLAY"]).save(shots[frames])
+        stats.update(frames=frames, recent_fps=sc.rate(), full_draws=sc.full_draws)
+
+    scope.frame_hooks.append(hook)
+    channel = f"scope-window-{uuid.uuid4().hex[:8]}"
+    with FakeNode(channel=channel, motion="sine") as node:
+        node.set_state("RUNNING")
+        code = main(["--interface", "virtual", "--channel", channel, "scope", "--host-heartbeat",
+                     "--window", "4", "--frames", str(first + gap + 2)])
+    (out / "stats.json").write_text(json.dumps(stats))
+    return code
+
+
+if __name__ == "__main__":
+    sys.exit(run(Path(sys.argv[1]), int(sys.argv[2]), int(sys.argv[3])))
