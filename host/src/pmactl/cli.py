@@ -18,7 +18,7 @@ from typing import Any, Callable, Sequence
 import can
 import cantools
 
-from pmactl import paramfile
+from pmactl import adapters, paramfile
 from pmactl.client import (NODE_REPLIES, CommandError, InterfaceError, MonitorEvent, BusMonitor, NodeStateError,
                            NoReply, ParamInfo, PmaError, PmaNode, RecordProgress, SetRejected,
                            Status, TelemetryRecorder, bus_config, describe_bus, open_bus, scan)
@@ -822,7 +822,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         _err(f"error: {e} (is the node on {s.bus_text}? --node, --channel, --timeout)")
         return EXIT_NO_REPLY
     except can.CanError as e:
-        _err(f"error: CAN interface {s.bus_text} failed: {e}")
+        hint = adapters.explain(s.cfg or {}, e)
+        _err(f"error: CAN interface {s.bus_text} failed: {e}" + (f"\n  {hint}" if hint else ""))
         return EXIT_INTERFACE
     except KeyboardInterrupt:
         _err("interrupted")
