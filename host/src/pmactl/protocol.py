@@ -152,11 +152,31 @@ class Param:
         return int(a) == int(b)
 
 
+# The protocol's single sources of truth, in the repository. A built package (wheel, sdist)
+# carries copies in pmactl/data/ (host/setup.py); an editable install reads them here.
+REPO_FILES = {"pma_proto.dbc": "firmware/protocol/pma_proto.dbc", "params.toml": "firmware/app/params.toml"}
+
+
 def _data_file(name: str, env: str) -> Path:
+    """The DBC or parameter table: $env when set, else the package's copy, else (an
+    editable install in the repository) the firmware's file."""
     override = os.environ.get(env)
     if override:
         return Path(override)
-    return Path(str(resources.files("pmactl") / "data" / name))
+    packaged = Path(str(resources.files("pmactl") / "data" / name))
+    if packaged.is_file():
+        return packaged
+    repo = Path(__file__).resolve().parents[3] / REPO_FILES[name]
+    if repo.is_file():
+        return repo
+    raise FileNotFoundError(f"pmactl: {name} is neither in the package ({packaged}) nor in a "
+                            f"repository checkout ({repo}): reinstall pmactl, or set {env}")
+
+
+def data_files() -> dict[str, Path]:
+    """Where this pmactl reads the DBC and the parameter table from."""
+    return {"dbc": _data_file("pma_proto.dbc", "PMA_DBC"),
+            "params": _data_file("params.toml", "PMA_PARAMS_TOML")}
 
 
 @dataclass
