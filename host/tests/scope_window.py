@@ -13,9 +13,8 @@ import sys
 import uuid
 from pathlib import Path
 
-from PIL import ImageGrab
-
 from fakenode import FakeNode
+from PIL import ImageGrab
 from pmactl import scope
 from pmactl.cli import main
 

@@ -9,8 +9,7 @@ from typing import Any
 
 import can
 import pytest
-
-from pmactl import adapters, client
+from pmactl import adapters
 from pmactl.cli import EXIT_INTERFACE
 
 HOST = Path(__file__).resolve().parents[1]
@@ -19,7 +18,7 @@ HOST = Path(__file__).resolve().parents[1]
 def _fail_with(monkeypatch: pytest.MonkeyPatch, exc: BaseException) -> None:
     def bus(**_kw: Any) -> can.BusABC:
         raise exc
-    monkeypatch.setattr(client.can, "Bus", bus)
+    monkeypatch.setattr(can, "Bus", bus)           # pmactl.client opens buses with can.Bus
 
 
 CASES = [

@@ -12,10 +12,15 @@ from typing import Any
 import can
 import cantools
 import pytest
-
 from fakenode import PROTO
 from pmactl.cli import EXIT_OK, EXIT_USAGE
-from pmactl.nodedbc import NodeListError, check_nodes, node_database, parse_nodes, write_node_dbc
+from pmactl.nodedbc import (
+    NodeListError,
+    check_nodes,
+    node_database,
+    parse_nodes,
+    write_node_dbc,
+)
 
 # One payload per message (valid signal values), encoded with the protocol's DBC.
 SAMPLES: dict[str, dict[str, Any]] = {
@@ -90,6 +95,7 @@ def test_cli_writes_a_dbc_that_cantools_loads(pmactl, tmp_path: Path) -> None:
     assert r.code == EXIT_OK, r.err
     assert "protocol 1 for node(s) 0,1,2" in r.out
     db = cantools.database.load_file(str(out))
+    assert isinstance(db, cantools.database.can.Database)
     assert db.get_message_by_name("HEARTBEAT_N15").frame_id == 0x0AF
     r = pmactl("dbc", "--nodes", "3", bus=False)          # stdout
     assert r.code == EXIT_OK and "BO_ 163 HEARTBEAT_N3: 8 PMA" in r.out

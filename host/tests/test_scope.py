@@ -8,14 +8,14 @@ import os
 import shutil
 import subprocess
 import sys
+from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Any, Callable, Iterator
+from typing import Any
 
 import numpy as np
 import pytest
-from PIL import Image
-
 from fakenode import wait_until
+from PIL import Image
 from pmactl import scope
 from pmactl.cli import EXIT_NO_REPLY, EXIT_OK, EXIT_USAGE
 from pmactl.recording import header_row, read_recording
@@ -33,7 +33,7 @@ def hooks() -> Iterator[list[Callable[[scope.Scope, int], None]]]:
 def _line_mask(path: Path) -> np.ndarray:
     """Pixels of node 0's colour (anti-aliased: within a small distance of it)."""
     img = np.asarray(Image.open(path).convert("RGB")).astype(int)
-    return np.abs(img - np.array(LINE_RGB)).sum(axis=2) < 60
+    return np.asarray(np.abs(img - np.array(LINE_RGB)).sum(axis=2) < 60, dtype=bool)
 
 
 def _moved_columns(a: np.ndarray, b: np.ndarray) -> tuple[int, int]:
@@ -154,7 +154,7 @@ def test_scope_in_a_window_under_xvfb(tmp_path: Path) -> None:
         env = dict(os.environ, DISPLAY=display, MPLBACKEND="TkAgg",
                    PYTHONPATH=os.pathsep.join([str(HERE)] + sys.path))
         r = subprocess.run([sys.executable, str(HERE / "scope_window.py"), str(tmp_path), "30", "15"],
-                           env=env, capture_output=True, text=True, timeout=300)
+                           env=env, capture_output=True, text=True, timeout=300, check=False)
         assert r.returncode == EXIT_OK, r.stdout + r.stderr
     finally:
         xvfb.terminate()

@@ -47,14 +47,14 @@ def _builder(where: Path) -> Path:
     venv.EnvBuilder(with_pip=False, clear=True).create(where)
     py = where / "bin" / "python"
     r = subprocess.run([sys.executable, "-m", "pip", "--python", str(py), "install", "-q", "setuptools>=77"],
-                       capture_output=True, text=True)
+                       capture_output=True, text=True, check=False)
     assert r.returncode == 0, r.stdout + r.stderr
     return py
 
 
 def build_wheel(src: Path, out: Path) -> Path:
     r = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", *_isolation_args(),
-                        "-q", "-w", str(out), str(src)], capture_output=True, text=True, cwd=out)
+                        "-q", "-w", str(out), str(src)], capture_output=True, text=True, cwd=out, check=False)
     assert r.returncode == 0, r.stdout + r.stderr
     (wheel,) = out.glob("pmactl-*.whl")
     return wheel
@@ -77,7 +77,7 @@ def fresh_venv(where: Path) -> Path:
 def install(py: Path, wheel: Path) -> None:
     deps = [] if os.environ.get("PMACTL_WHEEL_TEST_INDEX") else ["--no-deps"]
     r = subprocess.run([sys.executable, "-m", "pip", "--python", str(py), "install", "-q", *deps, str(wheel)],
-                       capture_output=True, text=True)
+                       capture_output=True, text=True, check=False)
     assert r.returncode == 0, r.stdout + r.stderr
 
 
@@ -101,12 +101,12 @@ def check_install(py: Path, cwd: Path) -> None:
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PMA_DBC", "PMA_PARAMS_TOML")}
     bindir = py.parent
     pmactl = bindir / ("pmactl.exe" if os.name == "nt" else "pmactl")
-    r = subprocess.run([str(pmactl), "--version"], capture_output=True, text=True, cwd=cwd, env=env)
+    r = subprocess.run([str(pmactl), "--version"], capture_output=True, text=True, cwd=cwd, env=env, check=False)
     assert r.returncode == 0, r.stderr
     assert r.stdout.startswith(f"pmactl {importlib.metadata.version('pmactl')} (protocol 1"), r.stdout
-    r = subprocess.run([str(py), "-c", CHECK], capture_output=True, text=True, cwd=cwd, env=env)
+    r = subprocess.run([str(py), "-c", CHECK], capture_output=True, text=True, cwd=cwd, env=env, check=False)
     assert r.returncode == 0 and r.stdout.startswith("ok "), r.stdout + r.stderr
-    r = subprocess.run([str(pmactl), "dbc", "--nodes", "2"], capture_output=True, text=True, cwd=cwd, env=env)
+    r = subprocess.run([str(pmactl), "dbc", "--nodes", "2"], capture_output=True, text=True, cwd=cwd, env=env, check=False)
     assert r.returncode == 0 and "HEARTBEAT_N2" in r.stdout, r.stderr
 
 
@@ -140,7 +140,7 @@ def test_wheel_from_a_copy_without_links_and_from_its_sdist(tmp_path: Path) -> N
     copy = tmp_path / "checkout"
     shutil.copytree(HOST, copy / "host", symlinks=False,
                     ignore=shutil.ignore_patterns("__pycache__", "*.egg-info", "build", ".pytest_cache"))
-    for inside, firmware in FIRMWARE.items():
+    for firmware in FIRMWARE.values():
         dest = copy / firmware.relative_to(REPO)
         dest.parent.mkdir(parents=True, exist_ok=True)
         shutil.copyfile(firmware, dest)
@@ -150,9 +150,9 @@ def test_wheel_from_a_copy_without_links_and_from_its_sdist(tmp_path: Path) -> N
     check_wheel_contents(wheel)
     # the sdist carries the firmware's files; a wheel built from it has them too
     sd = tmp_path / "sdist"
-    r = subprocess.run([str(_builder(tmp_path / "builder")), "-c", "import sys, setuptools.build_meta as b; "
-                        "print(b.build_sdist(sys.argv[1]))", str(sd)],
-                       cwd=copy / "host", capture_output=True, text=True)
+    r = subprocess.run([str(_builder(tmp_path / "builder")), "-c",
+                        "import sys, setuptools.build_meta as b; print(b.build_sdist(sys.argv[1]))", str(sd)],
+                       cwd=copy / "host", capture_output=True, text=True, check=False)
     assert r.returncode == 0, r.stdout + r.stderr
     (tarball,) = sd.glob("pmactl-*.tar.gz")
     shutil.unpack_archive(tarball, tmp_path / "unpacked")

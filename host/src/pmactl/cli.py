@@ -485,10 +485,10 @@ def cmd_params_load(s: Session) -> int:
     for p, old, new in report.changed:
         s.out(f"set {p.name} = {_value_unit(p, p.text(new))} (was {p.text(old)})")
     for e in report.rejected:
-        p = e.param
-        assert p is not None
-        _err(f"node {node.node} rejected set {p.name} = {p.text(e.requested or 0)}: "
-             f"{s.proto.status_text(e.code)}; it stays {p.text(e.current or 0)}")
+        param = e.param
+        assert param is not None
+        _err(f"node {node.node} rejected set {param.name} = {param.text(e.requested or 0)}: "
+             f"{s.proto.status_text(e.code)}; it stays {param.text(e.current or 0)}")
     s.out(f"{len(report.changed)} set, {len(report.unchanged)} unchanged, "
           f"{len(report.rejected)} rejected (from {s.args.file})")
     return EXIT_REFUSED if report.rejected else EXIT_OK
@@ -665,7 +665,7 @@ def cmd_plot(s: Session) -> int:
         except (OSError, ValueError, AttributeError) as e:
             raise paramfile.ParamFileError(str(meta_path), [f"not a recording's metadata: {e}"]) from None
     prefix = Path(s.args.out) if s.args.out else csv_path.with_suffix("")
-    written = plot_recording(rec, prefix, PlotOptions(w1_cm=w1, band_cm=band, t_u_s=t_u,  # type: ignore[arg-type]
+    written = plot_recording(rec, prefix, PlotOptions(w1_cm=w1, band_cm=band, t_u_s=t_u,
                                                       title=title, dpi=s.args.dpi,
                                                       panels=not s.args.no_panels))
     for path in written:

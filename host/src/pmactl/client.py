@@ -127,7 +127,7 @@ def open_bus(cfg: dict[str, Any]) -> can.BusABC:
         return can.Bus(**cfg)
     except KeyboardInterrupt:
         raise
-    except Exception as e:      # noqa: BLE001 - a driver without its library raises about anything
+    except Exception as e:      # a driver without its library raises about anything
         hint = adapters.explain(cfg, e)
         reason = str(e) or type(e).__name__
         raise InterfaceError(f"cannot open CAN interface {describe_bus(cfg)}: {reason}"

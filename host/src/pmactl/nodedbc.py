@@ -12,8 +12,8 @@ harness writes one beside its bus log.
 from __future__ import annotations
 
 import copy
+from collections.abc import Iterable
 from pathlib import Path
-from typing import Iterable
 
 import cantools.database
 from cantools.database.can import Database

@@ -188,9 +188,7 @@ class Protocol:
         self.by_name = {p.name: p for p in self.params}
         self.by_id = {p.id: p for p in self.params}
         self.messages = {m.name: m for m in self.db.messages}
-        self.status_names: dict[int, str] = {
-            int(k): str(v)
-            for k, v in self.messages["PARAM_RESP"].get_signal_by_name("Result").choices.items()}
+        self.status_names: dict[int, str] = self._choices("PARAM_RESP", "Result")
         self.fault_names: dict[int, str] = self._choices("HEARTBEAT", "FaultCode")
         self.state_names: dict[int, str] = self._choices("HEARTBEAT", "State")
         self.commands: dict[str, int] = {v: k for k, v in self._choices("COMMAND", "Command").items()}
@@ -204,7 +202,7 @@ class Protocol:
         return m.group(1) if m else text
 
     def _choices(self, msg: str, sig: str) -> dict[int, str]:
-        choices = self.messages[msg].get_signal_by_name(sig).choices or {}
+        choices: dict[Any, Any] = dict(self.messages[msg].get_signal_by_name(sig).choices or {})
         return {int(k): str(v) for k, v in choices.items()}
 
     def param(self, key: str | int) -> Param:
@@ -240,7 +238,9 @@ class Protocol:
         return bytes(m.encode(data or {}, scaling=False, strict=True))
 
     def decode(self, message: str, data: bytes) -> dict[str, Any]:
-        return dict(self.messages[message].decode(data, decode_choices=False, scaling=False))
+        decoded = self.messages[message].decode(data, decode_choices=False, scaling=False)
+        assert isinstance(decoded, dict)            # not a container message
+        return dict(decoded)
 
     def status_name(self, code: int) -> str:
         return self.status_names.get(code, f"status {code}")

@@ -23,20 +23,28 @@ import math
 import threading
 import time
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO, Any, Callable
+from typing import IO, Any
 
 import can
 
-from pmactl.client import (NoReply, PmaError, PmaNode, TelemetryGrouper, TelemetryRow, frame_filters,
-                           internal_labels)
+from pmactl.client import (
+    NoReply,
+    PmaError,
+    PmaNode,
+    TelemetryGrouper,
+    TelemetryRow,
+    frame_filters,
+    internal_labels,
+)
 from pmactl.paramfile import ParamFileError
 from pmactl.protocol import TELEM_FRAMES
 from pmactl.recording import header_row, row_cells
 
 # Called after each frame drawn with (scope, frames drawn so far): for tests and embedding.
-frame_hooks: list[Callable[["Scope", int], None]] = []
+frame_hooks: list[Callable[[Scope, int], None]] = []
 
 PANELS = (("x", "position x, reference x_r [cm]"), ("e", "error e [cm]"),
           ("u", "controller output u [input unit]"), ("p", "pressure command p [kPa]"))
@@ -177,9 +185,8 @@ class Scope:
             tr = self.traces.get(nid)
             if tr is None or name not in TELEM_FRAMES:
                 continue
-            try:
-                sig = node.proto.decode(name, bytes(msg.data))
-            except Exception:           # noqa: BLE001 - a frame of the wrong length: not ours
+            sig = _decode(node, name, msg)
+            if sig is None:             # a frame of the wrong length: not ours to show
                 continue
             for row in tr.grouper.feed(name, sig, msg.timestamp):
                 self._row(tr, row)
@@ -368,7 +375,7 @@ class Scope:
             canvas.blit(self._fig.bbox)
         self.frames += 1
         self._rate_frames.append(time.monotonic())
-        for hook in list(frame_hooks):
+        for hook in frame_hooks:
             hook(self, self.frames)
 
     def _on_draw(self, _event: Any) -> None:
@@ -501,6 +508,13 @@ class Scope:
                 fig.savefig(f"{prefix}_{self.frames:04d}.png", dpi=self.opts.dpi)
         except KeyboardInterrupt:
             self.stop("interrupted (Ctrl-C)")
+
+
+def _decode(node: PmaNode, name: str, msg: can.Message) -> dict[str, Any] | None:
+    try:
+        return node.proto.decode(name, bytes(msg.data))
+    except Exception:           # noqa: BLE001 - cantools raises several kinds on bad data
+        return None
 
 
 def _interactive(backend: str) -> bool:
