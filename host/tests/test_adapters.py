@@ -36,6 +36,7 @@ CASES = [
      ["pip install 'pmactl[gs-usb]'", "libusb"]),
     ("pcan", "PCAN_USBBUS1", OSError("pcanbasic library not found."),
      ["PCAN-Basic", "peak_usb", "pip install 'pmactl[pcan]'"]),
+    ("udp_multicast", None, ImportError("msgpack not installed"), ["pip install 'pmactl[multicast]'"]),
     ("kvaser", "0", NameError("name 'canGetNumberOfChannels' is not defined"), ["CANlib", "kvaser_usb"]),
     ("vector", None, TypeError("VectorBus.__init__() missing 1 required positional argument: 'channel'"),
      ["needs a channel", "--channel"]),

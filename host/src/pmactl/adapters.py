@@ -17,7 +17,7 @@ from typing import Any
 INTERFACE_EXTRAS: dict[str, str] = {
     "slcan": "serial", "serial": "serial", "robotell": "serial", "seeedstudio": "serial",
     "gs_usb": "gs-usb", "pcan": "pcan", "neovi": "neovi", "canalystii": "canalystii",
-    "cantact": "cantact", "candle": "candle",
+    "cantact": "cantact", "candle": "candle", "udp_multicast": "multicast",
 }
 # interfaces that also need a vendor's native library (not on PyPI)
 NATIVE_LIBRARIES: dict[str, str] = {
@@ -81,7 +81,7 @@ def explain(cfg: dict[str, Any], exc: BaseException) -> str:
         if exc.errno in (errno.EPERM, errno.EACCES):
             return "not allowed to open a raw CAN socket here (a sandbox?)"
     missing_module = (isinstance(exc, ImportError) or "no module named" in low
-                      or "module is not installed" in low or "cannot import module" in low)
+                      or "not installed" in low or "cannot import module" in low)
     if missing_module:
         hint = pip_hint(interface)
         lib = NATIVE_LIBRARIES.get(interface)
