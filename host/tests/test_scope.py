@@ -51,7 +51,7 @@ def test_headless_frames_show_moving_telemetry(fake, pmactl, tmp_path: Path) -> 
     assert r.code == EXIT_OK, r.err
     pngs = sorted(tmp_path.glob("f_*.png"))
     assert [p.name for p in pngs] == [f"f_{i:04d}.png" for i in range(1, 7)]
-    assert "6 frames drawn" in r.out and "telemetry rows shown" in r.out
+    assert "; 6 frames drawn" in r.out and "telemetry rows shown" in r.out
     first, last = _line_mask(pngs[0]), _line_mask(pngs[-1])
     assert last.sum() > 200                      # the lines are drawn
     cols, moved = _moved_columns(first, last)

@@ -714,9 +714,9 @@ def cmd_scope(s: Session) -> int:
         summary = scope.run()
     except ScopeError as e:
         raise UsageError(str(e)) from None
-    s.out(f"scope: {summary.frames} frames in {summary.elapsed_s:.1f} s ({summary.fps:.1f} frames/s, "
-          f"{summary.recent_fps:.1f} over the last 50; {summary.full_draws} full redraws): "
-          f"{summary.stop_reason}")
+    s.out(f"scope: {summary.frames} frames in {summary.elapsed_s:.1f} s: {summary.fps:.1f} frames/s "
+          f"from the first frame on, {summary.recent_fps:.1f} over the last 50, "
+          f"{summary.full_draws} full redraws; {summary.stop_reason}")
     for n, rows in summary.rows.items():
         rec = f", {summary.recorded[n]} recorded" if summary.recorded.get(n) else ""
         s.out(f"  node {n}: {rows} telemetry rows shown{rec}")

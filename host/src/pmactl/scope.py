@@ -115,9 +115,12 @@ class ScopeSummary:
     recent_fps: float = 0.0            # over the last 50 frames (the first, full draws excluded)
     full_draws: int = 0
 
+    drawing_s: float = 0.0             # from the first frame drawn to the last
+
     @property
     def fps(self) -> float:
-        return self.frames / self.elapsed_s if self.elapsed_s > 0 else 0.0
+        """Frames per second while drawing (the start-up, window and first draw excluded)."""
+        return (self.frames - 1) / self.drawing_s if self.frames > 1 and self.drawing_s > 0 else 0.0
 
 
 class Scope:
@@ -131,6 +134,8 @@ class Scope:
         self.quit_reason: str | None = None
         self.frames = 0
         self.full_draws = 0
+        self._first_frame_t: float | None = None
+        self._last_frame_t = 0.0
         self.files: list[str] = []
         self._hb_stop = threading.Event()
         self._fig: Any = None
@@ -374,7 +379,11 @@ class Scope:
             self._draw_animated()
             canvas.blit(self._fig.bbox)
         self.frames += 1
-        self._rate_frames.append(time.monotonic())
+        t = time.monotonic()
+        self._rate_frames.append(t)
+        if self._first_frame_t is None:
+            self._first_frame_t = t
+        self._last_frame_t = t
         for hook in frame_hooks:
             hook(self, self.frames)
 
@@ -493,7 +502,9 @@ class Scope:
                             rows={n: tr.rows for n, tr in self.traces.items()},
                             recorded={n: tr.recorded_total for n, tr in self.traces.items()}, files=self.files,
                             stop_reason=self.quit_reason or self._done() or "window closed",
-                            recent_fps=self.rate(), full_draws=self.full_draws)
+                            recent_fps=self.rate(), full_draws=self.full_draws,
+                            drawing_s=(self._last_frame_t - self._first_frame_t)
+                            if self._first_frame_t is not None else 0.0)
 
     def _run_headless(self, fig: Any, period_s: float) -> None:
         prefix = self.opts.png_prefix or Path("scope")
