@@ -14,6 +14,7 @@ import uuid
 from pathlib import Path
 
 from fakenode import FakeNode
+from matplotlib.backend_bases import KeyEvent
 from PIL import ImageGrab
 from pmactl import scope
 from pmactl.cli import main
@@ -23,7 +24,21 @@ def run(out: Path, first: int, gap: int) -> int:
     shots = {first + 1: out / "shot1.png", first + gap + 1: out / "shot2.png"}
     stats: dict[str, object] = {}
 
+    def press(sc: scope.Scope, key: str) -> None:
+        canvas = sc._fig.canvas
+        canvas.callbacks.process("key_press_event", KeyEvent("key_press_event", canvas, key))
+
     def hook(sc: scope.Scope, frames: int) -> None:
+        # keys through the window's own event dispatch: space pauses and resumes, s saves
+        # the view (and does not open matplotlib's save dialog, which would block here)
+        if frames == 5:
+            press(sc, " ")
+            stats["paused_after_space"] = sc.paused
+        elif frames == 8:
+            press(sc, " ")
+            stats["paused_after_second_space"] = sc.paused
+        elif frames == 10:
+            press(sc, "s")
         # the frame before this one has gone through Tk's event loop to the X server
         if frames in shots:
             ImageGrab.grab(xdisplay=os.environ["DISPLAY"]).save(shots[frames])

@@ -145,7 +145,7 @@ def _xvfb_missing() -> str | None:
 @pytest.mark.skipif(_xvfb_missing() is not None, reason=str(_xvfb_missing()))
 def test_scope_in_a_window_under_xvfb(tmp_path: Path) -> None:
     """The TkAgg window on a virtual X server: the plotted line is on the screen, and it
-    moves between a screenshot after frame 30 and one after frame 45."""
+    moves between a screenshot after frame 30 and one after frame 45; the keys work."""
     xvfb = subprocess.Popen(["Xvfb", "-displayfd", "1", "-screen", "0", "1024x768x24", "-nolisten", "tcp"],
                             stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
     try:
@@ -154,13 +154,15 @@ def test_scope_in_a_window_under_xvfb(tmp_path: Path) -> None:
         env = dict(os.environ, DISPLAY=display, MPLBACKEND="TkAgg",
                    PYTHONPATH=os.pathsep.join([str(HERE)] + sys.path))
         r = subprocess.run([sys.executable, str(HERE / "scope_window.py"), str(tmp_path), "30", "15"],
-                           env=env, capture_output=True, text=True, timeout=300, check=False)
+                           env=env, capture_output=True, text=True, timeout=300, check=False, cwd=tmp_path)
         assert r.returncode == EXIT_OK, r.stdout + r.stderr
     finally:
         xvfb.terminate()
         xvfb.wait(10)
     stats = json.loads((tmp_path / "stats.json").read_text())
     assert stats["frames"] == 47
+    assert stats["paused_after_space"] is True and stats["paused_after_second_space"] is False
+    assert len(list(tmp_path.glob("scope-*.png"))) == 1 and "view saved to scope-" in r.stdout
     a, b = _line_mask(tmp_path / "shot1.png"), _line_mask(tmp_path / "shot2.png")
     assert a.shape == (768, 1024)
     assert a.sum() > 300 and b.sum() > 300, (a.sum(), b.sum())      # the line is in the window

@@ -461,6 +461,11 @@ class Scope:
                 self._run_headless(fig, period_s)
             else:
                 fig.canvas.mpl_connect("draw_event", self._on_draw)
+                # matplotlib's own keys (s: a save dialog, p: pan, r: home view, ...) would
+                # fight the scope's: the scope's keys only
+                manager = fig.canvas.manager
+                if manager is not None and getattr(manager, "key_press_handler_id", None) is not None:
+                    fig.canvas.mpl_disconnect(manager.key_press_handler_id)
                 fig.canvas.mpl_connect("key_press_event", self.on_key)
                 fig.canvas.mpl_connect("close_event", lambda _e: self.stop("window closed"))
                 timer = fig.canvas.new_timer(interval=max(1, int(period_s * 1000)))
