@@ -98,6 +98,13 @@ def test_record_and_pause_keys(fake, pmactl, tmp_path: Path, hooks: list[Any]) -
     assert len(rec) == seen["recorded_after"]
     assert csv_path.read_text().splitlines()[0].split(",")[:6] == header_row()[:6]
     assert np.all(np.diff(rec["t"]) > 0) and not np.isnan(rec["x"]).any()
+    # `pmactl plot` draws it, with w1 and the band from the .meta.json beside it
+    meta = json.loads((tmp_path / "run.meta.json").read_text())
+    assert meta["node"] == 0 and meta["params"]["ppc.w1_cm"] == pytest.approx(node.value("ppc.w1_cm"))
+    r = pmactl("plot", str(csv_path), "--no-panels", bus=False)
+    assert r.code == EXIT_OK, r.err
+    assert (tmp_path / "run.png").exists() and "rows, t " in r.out
+    assert meta["controller"] == "PPC" and "|e| < w1 = " in r.out
 
 
 def test_two_nodes_record_one_file_each(fake, pmactl, tmp_path: Path) -> None:

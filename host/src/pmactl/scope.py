@@ -19,6 +19,7 @@ the header), one file per node: CSV for one node, CSV's stem + ``_n<node>`` for 
 from __future__ import annotations
 
 import csv
+import json
 import math
 import threading
 import time
@@ -41,7 +42,7 @@ from pmactl.client import (
 )
 from pmactl.paramfile import ParamFileError
 from pmactl.protocol import TELEM_FRAMES
-from pmactl.recording import header_row, row_cells
+from pmactl.recording import COLUMNS, header_row, row_cells
 
 # Called after each frame drawn with (scope, frames drawn so far): for tests and embedding.
 frame_hooks: list[Callable[[Scope, int], None]] = []
@@ -78,6 +79,7 @@ class Trace:
     grouper: TelemetryGrouper
     w1_cm: float | None = None
     controller: str | None = None      # ctrl.mode's name: the internals' columns
+    params: dict[str, float | int] = field(default_factory=dict)   # read at the start
     rx: deque[float] = field(default_factory=deque)
     cols: dict[str, deque[float]] = field(default_factory=lambda: {k: deque() for k in ("x", "xr", "e", "u", "p")})
     rows: int = 0
@@ -160,17 +162,21 @@ class Scope:
         saved = node.node
         for n in self.opts.nodes:
             mask, w1, controller = 0x1F, self.opts.w1_cm, None
+            params: dict[str, float | int] = {}
             node.node = n                     # the client's requests go to node n
             try:
                 mask = int(node.get("telem.mask"))
                 controller = node.proto.param("ctrl.mode").values.get(int(node.get("ctrl.mode")))
+                # what `pmactl plot` takes from a recording's .meta.json: w1, t_u, the band
+                for name in ("ppc.w1_cm", "ppc.t_u_s", "safety.x_min_cm", "safety.x_max_cm"):
+                    params[name] = node.get(name)
                 if w1 is None and controller == "PPC":
-                    w1 = float(node.get("ppc.w1_cm"))
+                    w1 = float(params["ppc.w1_cm"])
             except (NoReply, PmaError, KeyError):
-                pass            # a node that does not answer: shown with the defaults
+                pass            # a node that does not answer: shown with what it told
             finally:
                 node.node = saved
-            self.traces[n] = Trace(n, TelemetryGrouper(mask), w1, controller=controller)
+            self.traces[n] = Trace(n, TelemetryGrouper(mask), w1, controller=controller, params=params)
         if self.opts.record:
             self.start_recording()
 
@@ -250,9 +256,31 @@ class Scope:
             if tr.file is not None:
                 tr.file.close()
                 self.out(f"recorded {tr.recorded} rows of node {tr.node} to {tr.path}")
+                if tr.path is not None:
+                    self._write_meta(tr, tr.path)
             tr.file = tr.writer = None
             tr.recorded = 0
         self._recording = False
+
+    def _write_meta(self, tr: Trace, path: Path) -> None:
+        """PATH's .meta.json, as `pmactl record` writes it (fewer parameters: those `plot`
+        uses), so `pmactl plot` draws w1, t_u and the band of the run."""
+        proto = self.client.proto
+        labels = internal_labels(tr.controller)
+        meta = {
+            "format": "pmactl-recording 1", "source": "pmactl scope", "node": tr.node,
+            "controller": tr.controller,
+            "internal1": {"name": labels[0][0], "unit": labels[0][1]},
+            "internal2": {"name": labels[1][0], "unit": labels[1][1]},
+            "columns": [{"key": c.key, "unit": c.unit} for c in COLUMNS],
+            "summary": {"rows": tr.recorded},
+            "params": {k: float(v) for k, v in tr.params.items()},
+            "units": {k: proto.param(k).unit for k in tr.params},
+        }
+        try:
+            path.with_name(path.stem + ".meta.json").write_text(json.dumps(meta, indent=2) + "\n")
+        except OSError as e:
+            raise ParamFileError(str(path), [f"cannot write its metadata: {e.strerror or e}"]) from None
 
     # ----------------------------------------------------------- figure --
     def build_figure(self) -> Any:
