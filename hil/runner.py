@@ -34,6 +34,7 @@ from typing import Any
 import can
 
 from pmactl.client import NoReply, PmaError, PmaNode, frame_filters
+from pmactl.nodedbc import write_node_dbc
 
 from .fw_process import BUILD_HINT, FW_HOST, FirmwareProcess
 from .rig import Rig
@@ -73,6 +74,9 @@ class Lane:
     telem: dict[str, list[float]] = field(default_factory=dict)
     telem_row: dict[str, float] = field(default_factory=dict)
     params_read_back: dict[str, float | int] = field(default_factory=dict)  # every parameter, after configuring
+
+
+BUS_DBC = "bus.dbc"     # the DBC of the run's nodes (pmactl.nodedbc), beside the bus log
 
 
 @dataclass
@@ -166,6 +170,8 @@ class Runner:
         for n in nodes:
             filters += frame_filters(self.proto, msgs, n)
         self.bus.set_filters(filters)
+        # the DBC of these nodes beside the bus log: any DBC viewer decodes the log with it
+        write_node_dbc(self.out / BUS_DBC, nodes, self.proto)
         rp = self.sc.rig_params()
         for i, (ctrl, node) in enumerate(zip(self.sc.controllers, nodes)):
             client = PmaNode(self.bus, node, self.proto, timeout_s=self.opts.reply_timeout_s)
@@ -529,4 +535,5 @@ class Runner:
                 repeated_ticks=lane.repeated_ticks if self.opts.board else None))
         return summarise(self.sc, lanes, quick=self.opts.quick, duration_s=duration, period_s=self.period_s,
                          errors=self.errors, interrupted=self.interrupted, benchmark=self.bench, wall_s=wall_s,
-                         out=self.out, extra={"bus_log": f"bus.{self.opts.log_format}", "signals": "signals.npz"})
+                         out=self.out, extra={"bus_log": f"bus.{self.opts.log_format}", "bus_dbc": BUS_DBC,
+                                                "signals": "signals.npz"})

@@ -18,6 +18,7 @@ PACKAGES=(
   python3 python3-venv python3-pip                   # golden reference, reports
   user-mode-linux kmod iproute2 can-utils            # hil/with-vcan (vcan where the kernel has none)
   clang-14 libclang-rt-14-dev                        # libFuzzer target of the CAN frame handler
+  xvfb python3-tk                                    # pmactl scope's window test (Xvfb, TkAgg)
 )
 
 SUDO=""

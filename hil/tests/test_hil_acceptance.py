@@ -210,6 +210,26 @@ def test_bus_log_holds_every_bridge_frame(runs):
     assert n_sensor == ticks and n_act == ticks
 
 
+def test_bus_log_decodes_completely_with_the_dbc_beside_it(runs, tmp_path):
+    """bus.dbc (pmactl dbc of the run's nodes) decodes every frame of bus.blf in cantools'
+    own command line, after python-can's converter turned the BLF into a candump log."""
+    s, out = runs("wire_break")
+    assert s["bus_dbc"] == "bus.dbc" and (out / "bus.dbc").exists()
+    log = tmp_path / "bus.log"
+    subprocess.run([sys.executable, "-m", "can.logconvert", str(out / "bus.blf"), str(log)],
+                   check=True, capture_output=True)
+    with can.BLFReader(str(out / "bus.blf")) as reader:
+        frames = sum(1 for _ in reader)
+    r = subprocess.run([sys.executable, "-m", "cantools", "decode", "--single-line", str(out / "bus.dbc")],
+                       stdin=log.open(), capture_output=True, text=True, check=True)
+    lines = [line for line in r.stdout.splitlines() if line.strip()]
+    assert frames > 1000 and len(lines) == frames
+    unknown = [line for line in lines if "Unknown frame id" in line]
+    assert not unknown, unknown[:5]
+    assert any(":: PLANT_SENSOR_N1(" in line for line in lines)
+    assert any(":: HEARTBEAT_N1(" in line for line in lines)
+
+
 # ---------------------------------------------------------------- clean stops --
 def _start_cli(out: Path, extra_env: dict[str, str] | None = None) -> subprocess.Popen[bytes]:
     env = dict(os.environ, PMA_HIL_INSIDE="1", **(extra_env or {}))

@@ -78,6 +78,7 @@ class FakeNode:
     uid: bytes = bytes(range(1, 13))  # the 12-byte unique id DEVICE_INFO reports
     info_protocol_version: int | None = None  # DEVICE_INFO's ProtocolVersion (None: the DBC's)
     info_length: int = 8                      # DLC of the DEVICE_INFO frames it sends
+    motion: str = "approach"         # telemetry: "approach" (x settles on x_r) or "sine" (x_r a 2 s sine)
 
     def __post_init__(self) -> None:
         self.rows: dict[int, Row] = {}
@@ -172,8 +173,12 @@ class FakeNode:
     def _telemetry(self) -> None:
         self.telem_ticks += 1
         t = self.telem_ticks * self.telem_s
-        xr = -1.5
-        x = xr + 0.5 * math.exp(-t / 0.2)
+        if self.motion == "sine":
+            xr = -1.5 + 0.5 * math.sin(2 * math.pi * t / 2.0)
+            x = xr + 0.1 * math.cos(2 * math.pi * t / 2.0)
+        else:
+            xr = -1.5
+            x = xr + 0.5 * math.exp(-t / 0.2)
         e = x - xr
         u = -40.0 * e
         mask = int(self.value("telem.mask"))

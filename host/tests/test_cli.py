@@ -21,12 +21,24 @@ def test_help_lists_commands_and_exit_codes(capsys: pytest.CaptureFixture[str]) 
     assert main(["--help"]) == 0
     out = capsys.readouterr().out
     for cmd in ("scan", "status", "params", "arm", "disarm", "start", "stop", "estop", "clear-faults",
-                "controller", "reference", "setpoint", "record", "plot", "monitor"):
+                "controller", "reference", "setpoint", "record", "plot", "monitor", "scope", "dbc"):
         assert cmd in out
     for code in ("0 ", "1 ", "2 ", "3 ", "4 ", "5 "):
         assert f"\n  {code}" in out
     assert main(["params", "--help"]) == 0
     assert "restore-defaults" in capsys.readouterr().out
+
+
+def test_version_names_the_tool_and_the_protocol(capsys: pytest.CaptureFixture[str]) -> None:
+    import importlib.metadata
+    assert main(["--version"]) == EXIT_OK
+    out = capsys.readouterr().out.strip()
+    assert out == (f"pmactl {importlib.metadata.version('pmactl')} "
+                   f"(protocol {PROTO.version}, DBC VERSION \"{PROTO.db.version}\")")
+    header = (Path(__file__).resolve().parents[2] / "firmware/protocol/generated/pma_proto_version.h")
+    assert f"#define PMA_PROTO_VERSION {PROTO.version}u" in header.read_text()
+    repo_version = (Path(__file__).resolve().parents[2] / "VERSION").read_text().strip()
+    assert importlib.metadata.version("pmactl") == repo_version
 
 
 def test_bad_command_line_is_exit_2(pmactl) -> None:

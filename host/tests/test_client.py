@@ -67,9 +67,13 @@ def test_every_result_has_a_meaning() -> None:
 
 
 def test_package_data_is_the_firmwares() -> None:
-    data = HOST / "src/pmactl/data"
-    assert (data / "pma_proto.dbc").read_bytes() == (REPO / "firmware/protocol/pma_proto.dbc").read_bytes()
-    assert (data / "params.toml").read_bytes() == (REPO / "firmware/app/params.toml").read_bytes()
+    """pmactl reads the firmware's own files (an editable install: from the repository; a
+    wheel: its copies, test_wheel.py), never a copy kept in host/."""
+    from pmactl.protocol import data_files
+    files = data_files()
+    assert files["dbc"].read_bytes() == (REPO / "firmware/protocol/pma_proto.dbc").read_bytes()
+    assert files["params"].read_bytes() == (REPO / "firmware/app/params.toml").read_bytes()
+    assert not (HOST / "src/pmactl/data").exists() or not any((HOST / "src/pmactl/data").iterdir())
 
 
 def test_param_check() -> None:

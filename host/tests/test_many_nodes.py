@@ -22,8 +22,8 @@ def test_status_of_a_list_of_nodes_reports_each(pmactl, fake) -> None:
 
 
 @pytest.mark.parametrize("nodes, message", [
-    ("1,1", "node id 1 given twice"), ("2,0-3", "node id 2 given twice"), ("1,16", "outside 0..15"),
-    ("3-1", "runs backwards"), ("x", "is not a number"), ("", "is not a number")])
+    ("1,1", "node 1 listed twice"), ("2,0-3", "node 2 listed twice"), ("1,16", "outside 0..15"),
+    ("3-1", "runs backwards"), ("x", "is not a node id"), ("", "empty node list")])
 def test_bad_node_lists_are_usage_errors(pmactl, fake, nodes: str, message: str) -> None:
     n = fake(node=1)
     r = pmactl("--node", nodes, "arm")

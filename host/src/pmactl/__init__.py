@@ -9,9 +9,11 @@ from pmactl.client import (Ack, BusMonitor, CommandError, InterfaceError, LoadRe
                            NodeStateError, NoReply, ParamInfo, PmaError, PmaNode, RecordSummary,
                            SetRejected, Status, TelemetryGrouper, TelemetryRecorder, TelemetryRow,
                            bus_config, open_bus, scan)
+from pmactl.nodedbc import NodeListError, node_database, parse_nodes, write_node_dbc
 from pmactl.protocol import Param, Protocol, load_protocol
 
 __all__ = ["Ack", "BusMonitor", "CommandError", "InterfaceError", "LoadReport", "MonitorEvent",
-           "NodeStateError", "NoReply", "Param", "ParamInfo", "PmaError", "PmaNode", "Protocol",
+           "NodeListError", "NodeStateError", "NoReply", "Param", "ParamInfo", "PmaError", "PmaNode", "Protocol",
            "RecordSummary", "SetRejected", "Status", "TelemetryGrouper", "TelemetryRecorder",
-           "TelemetryRow", "bus_config", "load_protocol", "open_bus", "scan"]
+           "TelemetryRow", "bus_config", "load_protocol", "node_database", "open_bus", "parse_nodes",
+           "scan", "write_node_dbc"]

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import difflib
 import fnmatch
+import importlib.metadata
 import json
 import logging
 import math
@@ -17,11 +18,12 @@ from typing import Any, Callable, Sequence
 import can
 import cantools
 
-from pmactl import identity, paramfile
+from pmactl import adapters, identity, paramfile
 from pmactl.client import (NODE_REPLIES, CommandError, InterfaceError, MonitorEvent, BusMonitor, NodeStateError,
                            NoReply, ParamInfo, PmaError, PmaNode, RecordProgress, SetRejected,
                            Status, TelemetryRecorder, bus_config, describe_bus, open_bus, scan)
-from pmactl.protocol import Param, Protocol, load_protocol
+from pmactl.nodedbc import NodeListError, node_dbc_text, parse_nodes, write_node_dbc
+from pmactl.protocol import BROADCASTS, Param, Protocol, load_protocol
 from pmactl.recording import RecordingError, metrics, read_recording
 
 EXIT_OK = 0
@@ -79,22 +81,6 @@ def _common(p: argparse.ArgumentParser, suppress: bool) -> None:
                    help="show python-can's own log messages (warnings from the interface driver)")
 
 
-def _node_list(text: str) -> list[int]:
-    """'3', '1,2,5' or '0-3,7': distinct node ids 0..15, in the order given."""
-    out: list[int] = []
-    for part in text.split(","):
-        lo_text, dash, hi_text = part.strip().partition("-")
-        lo = _node_id(lo_text)
-        hi = _node_id(hi_text) if dash else lo
-        if hi < lo:
-            raise argparse.ArgumentTypeError(f"node range {part.strip()!r} runs backwards")
-        for n in range(lo, hi + 1):
-            if n in out:
-                raise argparse.ArgumentTypeError(f"node id {n} given twice in {text!r}")
-            out.append(n)
-    return out
-
-
 def _node_id(text: str) -> int:
     try:
         v = int(text, 0)
@@ -103,6 +89,13 @@ def _node_id(text: str) -> int:
     if not 0 <= v <= 15:
         raise argparse.ArgumentTypeError(f"node id {v} outside 0..15")
     return v
+
+
+def _node_list(text: str) -> list[int]:
+    try:
+        return parse_nodes(text)
+    except NodeListError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
 
 
 def _positive(text: str) -> float:
@@ -135,6 +128,16 @@ def _finite(text: str) -> float:
     return v
 
 
+def version_text() -> str:
+    """'pmactl X (protocol N, DBC "VERSION")': the tool's version and the protocol's."""
+    try:
+        tool = importlib.metadata.version("pmactl")
+    except importlib.metadata.PackageNotFoundError:
+        tool = "(not installed)"
+    proto = load_protocol()
+    return f'pmactl {tool} (protocol {proto.version}, DBC VERSION "{proto.db.version}")'
+
+
 def build_parser() -> argparse.ArgumentParser:
     fmt = argparse.RawDescriptionHelpFormatter
     parser = argparse.ArgumentParser(
@@ -142,6 +145,8 @@ def build_parser() -> argparse.ArgumentParser:
         description="Tune, command and watch PMA controller nodes over CAN "
                     "(protocol: firmware/protocol/pma_proto.dbc, parameters: docs/parameters.md).",
         epilog=EXIT_CODES_HELP)
+    parser.add_argument("--version", action="version", version=version_text(),
+                        help="the tool's version and the protocol version it speaks, and exit")
     _common(parser, suppress=False)
     common = argparse.ArgumentParser(add_help=False)
     _common(common, suppress=True)
@@ -248,6 +253,36 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-panels", action="store_true",
                    help="only PREFIX.png (all panels), not one PNG per panel")
 
+    p = add("scope", "live view of running nodes' telemetry: x and x_r, e with +-w1, u, pressure, over "
+                     "a rolling window; keys: space pause, r record (CSV as record's), s save PNG, q quit")
+    p.add_argument("--nodes", type=_node_list, metavar="LIST",
+                   help="the nodes to show: 1,2,5 or 0-3 (default: --node)")
+    p.add_argument("--window", type=_positive, default=10.0, metavar="S",
+                   help="rolling window in s (default 10)")
+    p.add_argument("--fps", type=_positive, default=30.0, help="redraws per second (default 30)")
+    p.add_argument("--w1", type=_positive, metavar="CM",
+                   help="the +-w1 band on e (default: each PPC node's ppc.w1_cm)")
+    p.add_argument("--host-heartbeat", action="store_true",
+                   help="send HOST_HEARTBEAT to the nodes (keeps them RUNNING without record/monitor)")
+    p.add_argument("--csv", metavar="CSV",
+                   help="recording file (several nodes: CSV's stem + _n<node>); default "
+                        "scope-<date>-<time>.csv when r is pressed")
+    p.add_argument("--record", action="store_true", help="record from the start")
+    p.add_argument("--seconds", type=_positive, help="stop after this long")
+    p.add_argument("--frames", type=_count, help="stop after this many frames drawn")
+    p.add_argument("--headless", action="store_true",
+                   help="no window: render with Agg and write each frame as PNG (--out, --frames)")
+    p.add_argument("--out", metavar="PREFIX", default="scope",
+                   help="headless: writes PREFIX_0001.png, ... (default scope)")
+    p.add_argument("--dpi", type=_count, default=80, help="resolution (default 80)")
+
+    p = add("dbc", "write a DBC of the protocol for every node given: each node's messages at "
+                   "their frame ids (NAME_N<node>), for cantools, SavvyCAN and other viewers")
+    p.add_argument("--nodes", type=_node_list, default=list(range(16)), metavar="LIST",
+                   help="node ids: 0-15 (the default), 1,2,5 or 0-3,8")
+    p.add_argument("-o", "--output", metavar="FILE", default="-",
+                   help="the DBC file to write (default '-': stdout)")
+
     p = add("monitor", "heartbeats and faults of every node, live, until Ctrl-C")
     p.add_argument("--seconds", type=_positive, help="stop after this long")
     p.add_argument("--every", action="store_true", help="print every heartbeat, not only changes")
@@ -299,7 +334,7 @@ class Session:
             elif cmd == "monitor":
                 self._node.listen_to(["HEARTBEAT", "ESTOP", "ESTOP_ALL", "COMMAND", "COMMAND_ACK",
                                       "PARAM_RESP"], node=None)
-            elif cmd != "record":
+            elif cmd not in ("record", "scope"):
                 self._node.listen_to(NODE_REPLIES)
         return self._node
 
@@ -555,10 +590,10 @@ def cmd_params_load(s: Session) -> int:
     for p, old, new in report.changed:
         s.out(f"set {p.name} = {_value_unit(p, p.text(new))} (was {p.text(old)})")
     for e in report.rejected:
-        p = e.param
-        assert p is not None
-        _err(f"node {node.node} rejected set {p.name} = {p.text(e.requested or 0)}: "
-             f"{s.proto.status_text(e.code)}; it stays {p.text(e.current or 0)}")
+        param = e.param
+        assert param is not None
+        _err(f"node {node.node} rejected set {param.name} = {param.text(e.requested or 0)}: "
+             f"{s.proto.status_text(e.code)}; it stays {param.text(e.current or 0)}")
     s.out(f"{len(report.changed)} set, {len(report.unchanged)} unchanged, "
           f"{len(report.rejected)} rejected (from {s.args.file})")
     return EXIT_REFUSED if report.rejected else EXIT_OK
@@ -772,7 +807,7 @@ def cmd_plot(s: Session) -> int:
         except (OSError, ValueError, AttributeError) as e:
             raise paramfile.ParamFileError(str(meta_path), [f"not a recording's metadata: {e}"]) from None
     prefix = Path(s.args.out) if s.args.out else csv_path.with_suffix("")
-    written = plot_recording(rec, prefix, PlotOptions(w1_cm=w1, band_cm=band, t_u_s=t_u,  # type: ignore[arg-type]
+    written = plot_recording(rec, prefix, PlotOptions(w1_cm=w1, band_cm=band, t_u_s=t_u,
                                                       title=title, dpi=s.args.dpi,
                                                       panels=not s.args.no_panels))
     for path in written:
@@ -780,6 +815,56 @@ def cmd_plot(s: Session) -> int:
     s.out(f"{csv_path}:")
     for line in metrics(rec, w1, t_u).lines(w1, t_u, rec.units.get("u", "input unit")):
         s.out(f"  {line}")
+    return EXIT_OK
+
+
+def cmd_dbc(s: Session) -> int:
+    nodes: list[int] = s.args.nodes
+    if s.args.output == "-":
+        sys.stdout.write(node_dbc_text(nodes, s.proto))
+        sys.stdout.flush()
+        return EXIT_OK
+    path = Path(s.args.output)
+    if not path.parent.exists():
+        raise UsageError(f"{path}: directory {path.parent} does not exist")
+    try:
+        write_node_dbc(path, nodes, s.proto)
+    except OSError as e:
+        raise paramfile.ParamFileError(str(path), [f"cannot write: {e.strerror or e}"]) from None
+    s.out(f"{path}: protocol {s.proto.version} for node(s) {','.join(map(str, nodes))} "
+          f"({len(s.proto.db.messages) - len(BROADCASTS)} messages per node, the broadcasts "
+          f"{', '.join(BROADCASTS)} once)")
+    return EXIT_OK
+
+
+def cmd_scope(s: Session) -> int:
+    from pmactl.scope import Scope, ScopeError, ScopeOptions
+    a = s.args
+    nodes: list[int] = a.nodes or list(a.node)
+    if a.headless and a.frames is None and a.seconds is None:
+        raise UsageError("--headless needs --frames N or --seconds S (it writes a PNG per frame)")
+    csv_path = Path(a.csv) if a.csv else None
+    out = Path(a.out)
+    for path in (csv_path, out if a.headless else None):
+        if path is not None and not path.parent.exists():
+            raise UsageError(f"{path}: directory {path.parent} does not exist")
+    opts = ScopeOptions(nodes=nodes, window_s=a.window, fps=a.fps, w1_cm=a.w1,
+                        host_heartbeat=a.host_heartbeat, csv=csv_path, record=a.record,
+                        seconds=a.seconds, frames=a.frames, headless=a.headless, png_prefix=out,
+                        dpi=a.dpi)
+    scope = Scope(s.node, opts, out=s.out)
+    try:
+        summary = scope.run()
+    except ScopeError as e:
+        raise UsageError(str(e)) from None
+    s.out(f"scope: {summary.frames} frames in {summary.elapsed_s:.1f} s: {summary.fps:.1f} frames/s "
+          f"from the first frame on, {summary.recent_fps:.1f} over the last 50, "
+          f"{summary.full_draws} full redraws; {summary.stop_reason}")
+    for n, rows in summary.rows.items():
+        rec = f", {summary.recorded[n]} recorded" if summary.recorded.get(n) else ""
+        s.out(f"  node {n}: {rows} telemetry rows shown{rec}")
+    if not any(summary.rows.values()) and not any(summary.recorded.values()):
+        raise NoReply(f"no telemetry from node(s) {','.join(map(str, nodes))} (are they RUNNING?)")
     return EXIT_OK
 
 
@@ -819,7 +904,7 @@ COMMANDS: dict[str, Callable[[Session], int]] = {
     "arm": cmd_command, "disarm": cmd_command, "start": cmd_command, "stop": cmd_command,
     "clear-faults": cmd_command, "estop": cmd_estop, "controller": cmd_select,
     "reference": cmd_select, "setpoint": cmd_setpoint, "record": cmd_record, "plot": cmd_plot,
-    "monitor": cmd_monitor, "node-id": cmd_node_id,
+    "monitor": cmd_monitor, "node-id": cmd_node_id, "dbc": cmd_dbc, "scope": cmd_scope,
 }
 # Commands that work on one node (or on the whole bus) and so take no list of nodes.
 SINGLE_NODE = ("scan", "record", "plot", "monitor", "node-id")
@@ -944,7 +1029,8 @@ def _run_one(s: Session) -> int:
         _err(f"error: {e} (is the node on {s.bus_text}? --node, --channel, --timeout)")
         return EXIT_NO_REPLY
     except can.CanError as e:
-        _err(f"error: CAN interface {s.bus_text} failed: {e}")
+        hint = adapters.explain(s.cfg or {}, e)
+        _err(f"error: CAN interface {s.bus_text} failed: {e}" + (f"\n  {hint}" if hint else ""))
         return EXIT_INTERFACE
     except KeyboardInterrupt:
         _err("interrupted")

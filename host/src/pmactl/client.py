@@ -25,8 +25,9 @@ from typing import Any, Callable, Iterable
 
 import can
 
+from pmactl import adapters
 from pmactl.protocol import BASE_ID_MASK, BROADCASTS, TELEM_FRAMES, Param, Protocol, load_protocol, to_f32
-from pmactl.recording import COLUMNS, header_row
+from pmactl.recording import COLUMNS, header_row, row_cells
 
 TYPE_CODES = {"f32": 0, "u32": 1, "i32": 2}
 TYPE_SIGNALS = {0: "ValueF32", 1: "ValueU32", 2: "ValueI32"}
@@ -100,7 +101,10 @@ def bus_config(interface: str | None = None, channel: str | None = None,
         cfg = dict(can.util.load_config(path=config_file, config=given, context=context))
     except can.CanInterfaceNotImplementedError as e:
         known = ", ".join(sorted(can.interfaces.VALID_INTERFACES))
-        raise InterfaceError(f"bad CAN configuration: {e} (python-can knows: {known})") from e
+        name = str(given.get("interface") or "")
+        hint = adapters.unknown_interface_hint(name) if name else ""
+        raise InterfaceError(f"bad CAN configuration: {e} (python-can knows: {known})"
+                             + (f"\n  {hint}" if hint else "")) from e
     except (ValueError, TypeError) as e:
         raise InterfaceError(f"bad CAN configuration: {e}") from e
     if cfg.get("channel") is None and cfg.get("interface") == DEFAULT_INTERFACE:
@@ -117,11 +121,17 @@ def describe_bus(cfg: dict[str, Any]) -> str:
 
 def open_bus(cfg: dict[str, Any]) -> can.BusABC:
     """can.Bus(**cfg); InterfaceError with python-can's reason when it cannot be opened
-    (python-can raises CanError or OSError on open, ImportError for a missing driver)."""
+    (python-can raises CanError or OSError on open, ImportError for a missing driver) and
+    the step that fixes it (pmactl.adapters.explain)."""
     try:
         return can.Bus(**cfg)
-    except (can.CanError, OSError, ImportError, ValueError, TypeError, NotImplementedError) as e:
-        raise InterfaceError(f"cannot open CAN interface {describe_bus(cfg)}: {e}") from e
+    except KeyboardInterrupt:
+        raise
+    except Exception as e:      # a driver without its library raises about anything
+        hint = adapters.explain(cfg, e)
+        reason = str(e) or type(e).__name__
+        raise InterfaceError(f"cannot open CAN interface {describe_bus(cfg)}: {reason}"
+                             + (f"\n  {hint}" if hint else "")) from e
 
 
 # Messages a node sends: what a client listens to.
@@ -992,21 +1002,7 @@ class TelemetryRecorder:
 
     @staticmethod
     def _write(w: Any, row: TelemetryRow, rx_rel: float) -> None:
-        cells: list[str] = []
-        for col in COLUMNS:
-            if col.key == "rx_time":
-                cells.append(f"{rx_rel:.6f}")
-                continue
-            v = row.values.get(col.key)
-            if v is None:
-                cells.append("")
-            elif col.key == "t":
-                cells.append(f"{float(v):.3f}")
-            elif isinstance(v, float):
-                cells.append(f"{v:.9g}")
-            else:
-                cells.append(str(int(v)))
-        w.writerow(cells)
+        w.writerow(row_cells(row.values, rx_rel))
 
     def _write_meta(self, summary: RecordSummary, controller: str | None,
                     labels: tuple[tuple[str, str], tuple[str, str]]) -> None:

@@ -159,11 +159,31 @@ class Param:
         return int(a) == int(b)
 
 
+# The protocol's single sources of truth, in the repository. A built package (wheel, sdist)
+# carries copies in pmactl/data/ (host/setup.py); an editable install reads them here.
+REPO_FILES = {"pma_proto.dbc": "firmware/protocol/pma_proto.dbc", "params.toml": "firmware/app/params.toml"}
+
+
 def _data_file(name: str, env: str) -> Path:
+    """The DBC or parameter table: $env when set, else the package's copy, else (an
+    editable install in the repository) the firmware's file."""
     override = os.environ.get(env)
     if override:
         return Path(override)
-    return Path(str(resources.files("pmactl") / "data" / name))
+    packaged = Path(str(resources.files("pmactl") / "data" / name))
+    if packaged.is_file():
+        return packaged
+    repo = Path(__file__).resolve().parents[3] / REPO_FILES[name]
+    if repo.is_file():
+        return repo
+    raise FileNotFoundError(f"pmactl: {name} is neither in the package ({packaged}) nor in a "
+                            f"repository checkout ({repo}): reinstall pmactl, or set {env}")
+
+
+def data_files() -> dict[str, Path]:
+    """Where this pmactl reads the DBC and the parameter table from."""
+    return {"dbc": _data_file("pma_proto.dbc", "PMA_DBC"),
+            "params": _data_file("params.toml", "PMA_PARAMS_TOML")}
 
 
 @dataclass
@@ -175,15 +195,18 @@ class Protocol:
         self.by_name = {p.name: p for p in self.params}
         self.by_id = {p.id: p for p in self.params}
         self.messages = {m.name: m for m in self.db.messages}
-        self.status_names: dict[int, str] = {
-            int(k): str(v)
-            for k, v in self.messages["PARAM_RESP"].get_signal_by_name("Result").choices.items()}
+        self.status_names: dict[int, str] = self._choices("PARAM_RESP", "Result")
         self.fault_names: dict[int, str] = self._choices("HEARTBEAT", "FaultCode")
         self.state_names: dict[int, str] = self._choices("HEARTBEAT", "State")
         self.commands: dict[str, int] = {v: k for k, v in self._choices("COMMAND", "Command").items()}
 
+    @property
+    def version(self) -> str:
+        """The protocol version the DBC describes, as text (protocol_version())."""
+        return str(protocol_version(self.db))
+
     def _choices(self, msg: str, sig: str) -> dict[int, str]:
-        choices = self.messages[msg].get_signal_by_name(sig).choices or {}
+        choices: dict[Any, Any] = dict(self.messages[msg].get_signal_by_name(sig).choices or {})
         return {int(k): str(v) for k, v in choices.items()}
 
     def param(self, key: str | int) -> Param:
@@ -220,7 +243,9 @@ class Protocol:
         return bytes(m.encode(data or {}, scaling=False, strict=True))
 
     def decode(self, message: str, data: bytes) -> dict[str, Any]:
-        return dict(self.messages[message].decode(data, decode_choices=False, scaling=False))
+        decoded = self.messages[message].decode(data, decode_choices=False, scaling=False)
+        assert isinstance(decoded, dict)            # not a container message
+        return dict(decoded)
 
     def status_name(self, code: int) -> str:
         return self.status_names.get(code, f"status {code}")

@@ -68,6 +68,26 @@ def header_row(labels: tuple[tuple[str, str], tuple[str, str]] | None = None) ->
     return out
 
 
+def row_cells(values: dict[str, float | int], rx_rel_s: float) -> list[str]:
+    """The CSV cells of one telemetry row (values by column key; a missing key is an empty
+    cell), rx_rel_s the host's receive time in s since the first row."""
+    cells: list[str] = []
+    for col in COLUMNS:
+        if col.key == "rx_time":
+            cells.append(f"{rx_rel_s:.6f}")
+            continue
+        v = values.get(col.key)
+        if v is None:
+            cells.append("")
+        elif col.key == "t":
+            cells.append(f"{float(v):.3f}")
+        elif isinstance(v, float):
+            cells.append(f"{v:.9g}")
+        else:
+            cells.append(str(int(v)))
+    return cells
+
+
 class RecordingError(ValueError):
     """The file is not a pmactl recording."""
 

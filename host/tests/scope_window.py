@@ -1,0 +1,58 @@
+"""Runs `pmactl scope` in a real window against a fake node, for test_scope.py: the fake
+node (fakenode.py, x_r a 2 s sine) RUNNING on a virtual bus in this process, the scope
+through pmactl's command line, and two screenshots of the X display (PIL.ImageGrab)
+taken after frames FIRST and FIRST + GAP, counted in frames drawn, not in seconds.
+
+    python scope_window.py OUT_DIR FIRST GAP        (DISPLAY names the X server)
+"""
+from __future__ import annotations
+
+import json
+import os
+import sys
+import uuid
+from pathlib import Path
+
+from fakenode import FakeNode
+from matplotlib.backend_bases import KeyEvent
+from PIL import ImageGrab
+from pmactl import scope
+from pmactl.cli import main
+
+
+def run(out: Path, first: int, gap: int) -> int:
+    shots = {first + 1: out / "shot1.png", first + gap + 1: out / "shot2.png"}
+    stats: dict[str, object] = {}
+
+    def press(sc: scope.Scope, key: str) -> None:
+        canvas = sc._fig.canvas
+        canvas.callbacks.process("key_press_event", KeyEvent("key_press_event", canvas, key))
+
+    def hook(sc: scope.Scope, frames: int) -> None:
+        # keys through the window's own event dispatch: space pauses and resumes, s saves
+        # the view (and does not open matplotlib's save dialog, which would block here)
+        if frames == 5:
+            press(sc, " ")
+            stats["paused_after_space"] = sc.paused
+        elif frames == 8:
+            press(sc, " ")
+            stats["paused_after_second_space"] = sc.paused
+        elif frames == 10:
+            press(sc, "s")
+        # the frame before this one has gone through Tk's event loop to the X server
+        if frames in shots:
+            ImageGrab.grab(xdisplay=os.environ["DISPLAY"]).save(shots[frames])
+        stats.update(frames=frames, recent_fps=sc.rate(), full_draws=sc.full_draws)
+
+    scope.frame_hooks.append(hook)
+    channel = f"scope-window-{uuid.uuid4().hex[:8]}"
+    with FakeNode(channel=channel, motion="sine") as node:
+        node.set_state("RUNNING")
+        code = main(["--interface", "virtual", "--channel", channel, "scope", "--host-heartbeat",
+                     "--window", "4", "--frames", str(first + gap + 2)])
+    (out / "stats.json").write_text(json.dumps(stats))
+    return code
+
+
+if __name__ == "__main__":
+    sys.exit(run(Path(sys.argv[1]), int(sys.argv[2]), int(sys.argv[3])))
