@@ -33,6 +33,7 @@ from typing import Any
 
 import can
 
+from pmactl import identity
 from pmactl.client import NoReply, PmaError, PmaNode, frame_filters
 from pmactl.nodedbc import write_node_dbc
 
@@ -74,6 +75,7 @@ class Lane:
     telem: dict[str, list[float]] = field(default_factory=dict)
     telem_row: dict[str, float] = field(default_factory=dict)
     params_read_back: dict[str, float | int] = field(default_factory=dict)  # every parameter, after configuring
+    identity: dict[str, Any] = field(default_factory=dict)  # the node's DEVICE_INFO (pmactl.identity)
 
 
 BUS_DBC = "bus.dbc"     # the DBC of the run's nodes (pmactl.nodedbc), beside the bus log
@@ -165,7 +167,7 @@ class Runner:
         if self.opts.board and len(self.sc.controllers) != 1:
             raise RunError("--board runs one controller at a time: choose it with --controller LABEL")
         msgs = ["PLANT_ACTUATOR", "COMMAND_ACK", "PARAM_RESP", "HEARTBEAT", "TELEM_A", "TELEM_B",
-                "TELEM_C", "TELEM_D", "TELEM_E"]
+                "TELEM_C", "TELEM_D", "TELEM_E", "DEVICE_INFO"]
         filters: list[dict[str, Any]] = []
         for n in nodes:
             filters += frame_filters(self.proto, msgs, n)
@@ -249,6 +251,10 @@ class Runner:
                 except NoReply as e:
                     raise RunError(f"node {lane.node} ({lane.ctrl.label}) does not answer PARAM_REQ: {e}") from e
             lane.params_read_back = lane.client.snapshot()
+            try:
+                lane.identity = identity.device_info(lane.client).as_dict()
+            except NoReply as e:
+                lane.identity = {"node": lane.node, "error": str(e)}
 
     # ------------------------------------------------------------- ticking --
     def _tick(self, rec: Recorder, phase: int, run_step: int) -> int:
@@ -536,4 +542,5 @@ class Runner:
         return summarise(self.sc, lanes, quick=self.opts.quick, duration_s=duration, period_s=self.period_s,
                          errors=self.errors, interrupted=self.interrupted, benchmark=self.bench, wall_s=wall_s,
                          out=self.out, extra={"bus_log": f"bus.{self.opts.log_format}", "bus_dbc": BUS_DBC,
-                                                "signals": "signals.npz"})
+                                                "signals": "signals.npz",
+                                                "identity": {ln.ctrl.label: ln.identity for ln in self.lanes}})

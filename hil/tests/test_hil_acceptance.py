@@ -230,6 +230,22 @@ def test_bus_log_decodes_completely_with_the_dbc_beside_it(runs, tmp_path):
     assert any(":: HEARTBEAT_N1(" in line for line in lines)
 
 
+def test_summary_records_every_nodes_identity(runs):
+    """summary.json's identity: each lane's DEVICE_INFO (firmware, protocol, table, unique id)."""
+    s, _ = runs("wire_break")
+    from pmactl.protocol import load_protocol, protocol_version
+    version = (REPO / "VERSION").read_text().strip()
+    assert set(s["identity"]) == set(s["controllers"])
+    uids = set()
+    for label, ident in s["identity"].items():
+        assert "error" not in ident, (label, ident)
+        assert ident["protocol_version"] == protocol_version(load_protocol().db)
+        assert ident["firmware"].startswith(version) and ident["build_target"] == "HOST"
+        assert ident["problems"] == [] and len(ident["uid"]) == 24
+        uids.add(ident["uid"])
+    assert len(uids) == len(s["identity"])           # each lane its own device
+
+
 # ---------------------------------------------------------------- clean stops --
 def _start_cli(out: Path, extra_env: dict[str, str] | None = None) -> subprocess.Popen[bytes]:
     env = dict(os.environ, PMA_HIL_INSIDE="1", **(extra_env or {}))

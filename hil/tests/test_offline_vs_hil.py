@@ -40,7 +40,7 @@ pytestmark = pytest.mark.skipif(not GIVEN_RUN and not Path("/sys/class/net/vcan0
 
 SCENARIO = "case3"
 # run-specific, not figures of the controllers: where and how fast it ran
-NOT_COMPARED = {"benchmark", "wall_s", "bus_log", "offline", "errors"}
+NOT_COMPARED = {"benchmark", "wall_s", "bus_log", "bus_dbc", "offline", "errors", "identity"}
 
 
 @pytest.fixture(scope="module")
