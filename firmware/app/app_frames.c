@@ -49,10 +49,7 @@ static void send_ack(pma_app_t *app, uint8_t command, uint8_t arg, int rc)
 static void send_param_resp(pma_app_t *app, uint8_t op, uint16_t id, int rc, uint8_t type,
                             pma_param_value_t v)
 {
-    if (type > PMA_PARAM_I32) { /* an undefined Type echoed from a request: keep the reply decodable */
-        type = PMA_PARAM_U32;
-        v.u32 = 0;
-    }
+    if (type > PMA_PARAM_I32) v.u32 = 0; /* an undefined Type, echoed from the request: no value */
     struct pma_proto_param_resp_t m;
     memset(&m, 0, sizeof m);
     m.op = (uint8_t)(op & 0x0Fu);
@@ -246,7 +243,9 @@ static void on_param_req(pma_app_t *app, const pma_can_frame_t *f)
         rc = pma_param_get(&app->params, id, &type, &v);
         break;
     case PMA_PARAM_OP_SET: {
-        if (req_type > PMA_PARAM_I32) {
+        if (d == NULL) {
+            rc = PMA_ERR_UNKNOWN_ID; /* the id first, whatever the Type (docs/protocol.md) */
+        } else if (req_type > PMA_PARAM_I32) {
             rc = PMA_ERR_TYPE;
         } else {
             pma_param_value_t nv;

@@ -158,12 +158,12 @@ def test_param_set_not_finite_and_out_of_range(idle_node) -> None:
         for op in (0, 1, 4, 5, 6):
             node.send_raw(PARAM_REQ | NODE, param_raw(op, 1, pid, 0, b"\x01\x00\x00\x00"))
             assert param_resp(node, op, pid)["Result"] == RESULT["UNKNOWN_ID"], (pid, op)
-    # an unknown id with an undefined Type: the reply stays decodable (Type 0..2)
+    # an unknown id with an undefined Type: UNKNOWN_ID (the id is checked first), Type echoed
     for t in (3, 7, 15):
         for op in (0, 1, 4, 5, 6):
             node.send_raw(PARAM_REQ | NODE, param_raw(op, t, 999))
             r = param_resp(node, op, 999)
-            assert r["Result"] in (RESULT["UNKNOWN_ID"], RESULT["TYPE"]) and r["Type"] <= 2, (t, op, r)
+            assert r["Result"] == RESULT["UNKNOWN_ID"] and r["Type"] == t, (t, op, r)
     for pid in (max(q.id for q in PROTO.params), 0xFFFF):
         node.send_raw(PARAM_REQ | NODE, param_raw(7, 1, pid))
         assert param_resp(node, 7, pid)["Result"] == RESULT["EMPTY"]
