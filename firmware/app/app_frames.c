@@ -217,6 +217,24 @@ static int whole_set_op(pma_app_t *app, uint8_t op)
     }
 }
 
+/* GET_STATUS: the node's counters and status values (PMA_STATUS_*, app.h). */
+static int status_value(const pma_app_t *app, uint16_t id, uint32_t *out)
+{
+    pma_can_status_t cs;
+    switch (id) {
+    case PMA_STATUS_LAST_RULE: *out = app->last_rule; return PMA_OK;
+    case PMA_STATUS_RX_OVERRUNS:
+        *out = pma_hal_can_status(&cs) == PMA_OK ? cs.rx_overruns : 0u;
+        return PMA_OK;
+    case PMA_STATUS_RX_DEFERRED: *out = app->counters.req_deferred; return PMA_OK;
+    case PMA_STATUS_RX_DROPPED: *out = app->counters.req_dropped; return PMA_OK;
+    case PMA_STATUS_FRAMES_BAD: *out = app->counters.frames_bad; return PMA_OK;
+    case PMA_STATUS_TICKS: *out = (uint32_t)app->ticks; return PMA_OK;
+    case PMA_STATUS_FRAMES_RX: *out = app->counters.frames_rx; return PMA_OK;
+    default: *out = 0; return PMA_ERR_UNKNOWN_ID;
+    }
+}
+
 static void on_param_req(pma_app_t *app, const pma_can_frame_t *f)
 {
     const pma_param_value_t zero = {.u32 = 0};
@@ -257,6 +275,7 @@ static void on_param_req(pma_app_t *app, const pma_can_frame_t *f)
                 pma_params_t trial = app->params;
                 (void)pma_param_set(&trial, id, (pma_param_type_t)req_type, nv, pma_app_phase(app));
                 rc = pma_app_check_param_groups(&trial);
+                if (rc == PMA_ERR_RANGE) app->last_rule = (uint8_t)pma_app_param_rule(&trial, 1);
                 if (rc == PMA_OK) app->params = trial;
             }
             if (rc == PMA_OK) {
@@ -291,6 +310,10 @@ static void on_param_req(pma_app_t *app, const pma_can_frame_t *f)
         v.u32 = next;
         break;
     }
+    case PMA_PARAM_OP_GET_STATUS:
+        type = PMA_PARAM_U32;
+        rc = status_value(app, id, &v.u32);
+        break;
     default:
         rc = PMA_ERR_UNKNOWN_COMMAND;
         break;

@@ -83,7 +83,7 @@ static void test_defaults_equal_table(void **state)
     assert_int_equal(p.sys_tick_hz, 1000u);
     assert_int_equal(p.sys_heartbeat_ms, 100u);
     assert_int_equal(p.ctrl_mode, PMA_CTRL_MODE_PPC);
-    assert_true(p.ctrl_u_min == -400.0f && p.ctrl_u_max == 400.0f);
+    assert_true(p.ctrl_u_min == -300.0f && p.ctrl_u_max == 300.0f);
     assert_true(p.ref_offset_cm == -1.5f);
     assert_int_equal(p.act_polarity, 1);
     assert_true(p.act_p0_kpa == 300.0f);

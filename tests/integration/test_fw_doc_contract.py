@@ -64,3 +64,70 @@ def test_set_checks_the_id_before_the_type(firmware, bus) -> None:
         r = raw_reply(bus, param_raw(1, t, telem_mask, 0, b"\x03\x00\x00\x00"))
         assert r == bytes([0x11, telem_mask, 0, 0xED, 31, 0, 0, 0]), (t, r.hex())
     assert node.get("telem.mask") == 31
+
+
+# ------------------------------------------------ rules between parameters --
+
+PARAM_ID = {p.name: p.id for p in __import__("test_fw_lib").PROTO.params}
+GET_STATUS = 9
+STATUS_LAST_RULE = 1
+
+
+def last_rule(bus: can.BusABC) -> int:
+    r = raw_reply(bus, param_raw(GET_STATUS, 1, STATUS_LAST_RULE))
+    assert r[0] == (1 << 4 | GET_STATUS) and r[3] == 0, r.hex()
+    return int.from_bytes(r[4:], "little")
+
+
+def set_u32(bus: can.BusABC, name: str, v: int) -> bytes:
+    return raw_reply(bus, param_raw(1, 1, PARAM_ID[name], 0, v.to_bytes(4, "little")))
+
+
+def test_rule_wire_break_needs_the_documented_order(firmware, bus) -> None:
+    """docs/parameters.md rule 3: lowering adc.raw_min_counts below the wire-break level
+    is refused with RANGE (LAST_RULE 3) until the wire-break level is lowered first."""
+    fw, node = start(firmware, bus, node=NODE)
+    assert last_rule(bus) == 0
+    # the issue's frame: raw_min = 700 (0x2BC) while the wire-break level is 737
+    r = raw_reply(bus, bytes.fromhex("11820000BC020000"))
+    assert r[3] == 0xFD and int.from_bytes(r[4:], "little") == 778, r.hex()   # RANGE, the value stays
+    assert last_rule(bus) == 3
+    # the documented order: the wire-break level first, then raw_min
+    assert set_u32(bus, "adc.wire_break_below_counts", 600)[3] == 0
+    assert set_u32(bus, "adc.raw_min_counts", 700)[3] == 0
+    # rule 2: raw_min above raw_max
+    r = set_u32(bus, "adc.raw_min_counts", 4095)
+    assert r[3] == 0xFD and last_rule(bus) == 2
+    assert node.get("adc.raw_min_counts") == 700
+
+
+def test_defaults_keep_u_inside_the_pressure_range(firmware, bus, proto) -> None:
+    """docs/tuning.md: ctrl.u_min = p_min - p0, ctrl.u_max = p_max - p0 (rule 12); the
+    defaults agree, and ARM refuses a set whose u range commands pressures the actuator
+    limits cut (RANGE, LAST_RULE 12), nothing changes."""
+    from test_fw_lib import Rig, default_of
+    d = {n: default_of(n) for n in ("ctrl.u_min", "ctrl.u_max", "act.p0_kpa", "act.p_min_kpa",
+                                      "act.p_max_kpa", "act.kpa_per_u", "act.polarity")}
+    assert d["act.polarity"] == 1 and d["act.kpa_per_u"] == 1
+    assert d["ctrl.u_min"] == d["act.p_min_kpa"] - d["act.p0_kpa"]
+    assert d["ctrl.u_max"] == d["act.p_max_kpa"] - d["act.p0_kpa"]
+    fw, node = start(firmware, bus, node=NODE)
+    rig = Rig(node)
+    rig.tick()
+    for name, v in d.items():
+        assert node.get(name) == v, name
+    for name, v in (("ctrl.u_min", -400.0), ("ctrl.u_max", 400.0)):
+        node.set(name, v)
+        rig.tick()
+        ack = node.command("ARM", check=False)
+        assert proto.status_name(ack.result) == "RANGE" and ack.state == STATE["IDLE"], ack
+        assert last_rule(bus) == 12
+        node.set(name, d[name])
+    # the same with polarity -1 and p0 100: the harness's rig set (u = -800..100 on 0..900 kPa)
+    node.set("act.polarity", -1)
+    node.set("act.p0_kpa", 100.0)
+    node.set("act.p_max_kpa", 900.0)
+    node.set("ctrl.u_min", -800.0)
+    node.set("ctrl.u_max", 100.0)
+    rig.tick()
+    assert node.command("ARM", check=False).result == 0
