@@ -169,7 +169,7 @@ def gen_param_doc(params: list[dict[str, Any]]) -> str:
            "at the next START); *idle* only while the output is inactive (BOOT, IDLE, FAULT).\n",
            "Rules between parameters (the table below) are refused with `PMA_ERR_RANGE` (-3), and\n",
            "nothing changes; GET_STATUS (PARAM_REQ Op 9) of Id 1, LAST_RULE, then gives the number of\n",
-           "the rule that refused (`pmactl` prints it with the error). START also checks the\n",
+           "the rule that refused (docs/protocol.md, \"Status values\"). START also checks the\n",
            "controller's own rules (for example `PMA_ERR_BAND`: the reference must keep `ppc.w1_cm`\n",
            "inside the constraints).\n\n",
            "Types: f32 (IEEE 754 single), u32, i32; enumerations are u32 (values listed).\n\n",

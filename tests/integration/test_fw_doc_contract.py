@@ -131,3 +131,60 @@ def test_defaults_keep_u_inside_the_pressure_range(firmware, bus, proto) -> None
     node.set("ctrl.u_max", 100.0)
     rig.tick()
     assert node.command("ARM", check=False).result == 0
+
+
+# ------------------------------------- behaviour docs/firmware.md now states --
+
+def test_storage_file_must_be_8192_bytes(tmp_path, firmware, bus) -> None:
+    """docs/firmware.md --storage: created with 8,192 bytes; an existing file of another
+    size (an empty one made by touch) is refused with exit status 1 and left alone."""
+    import subprocess
+    from conftest import CHANNEL, FW_HOST
+    empty = tmp_path / "node.nvm"
+    empty.touch()
+    r = subprocess.run([str(FW_HOST), "--can", CHANNEL, "--storage", str(empty)],
+                       capture_output=True, text=True, timeout=20)
+    assert r.returncode == 1 and "0 bytes" in r.stderr and "8192" in r.stderr, r
+    assert empty.read_bytes() == b""
+    made = tmp_path / "made.nvm"
+    fw, node = start(firmware, bus, node=NODE, storage=made)
+    assert made.stat().st_size == 8192
+    fw.stop()
+
+
+def test_node_option_does_not_change_the_parameter(firmware, bus) -> None:
+    """docs/firmware.md --node: the node answers on the given id while GET sys.node_id
+    returns the stored (here the default) value."""
+    from test_fw_lib import default_of
+    fw, node = start(firmware, bus, node=NODE)
+    assert node.get("sys.node_id") == default_of("sys.node_id") != NODE
+
+
+def test_non_zero_arg_is_accepted_and_echoed(firmware, bus) -> None:
+    """docs/protocol.md COMMAND Arg: commands other than SELECT_* ignore Arg; a non-zero
+    one is carried out and echoed."""
+    from test_fw_lib import Rig
+    fw, node = start(firmware, bus, node=NODE)
+    rig = Rig(node)
+    rig.tick()
+    for cmd, arg, state in (("ARM", 7, "ARMED"), ("STOP", 200, "ARMED"), ("DISARM", 1, "IDLE"),
+                            ("ESTOP", 0, "FAULT"), ("CLEAR_FAULTS", 255, "IDLE")):
+        ack = node.command(cmd, arg, check=False)
+        assert (ack.arg, ack.result, ack.state) == (arg, 0, STATE[state]), (cmd, ack)
+        rig.tick()
+
+
+def test_status_values_are_readable(firmware, bus) -> None:
+    """docs/protocol.md "Status values": every Id 1..7 answers U32 with Result 0 (any request
+    Type); another Id UNKNOWN_ID; FRAMES_BAD counts a frame of the wrong length."""
+    fw, node = start(firmware, bus, node=NODE)
+    for sid in range(1, 8):
+        for t in (0, 1, 2, 7):
+            r = raw_reply(bus, param_raw(GET_STATUS, t, sid))
+            assert r[0] == (1 << 4 | GET_STATUS) and r[3] == 0, (sid, t, r.hex())
+    for sid in (0, 8, 999):
+        assert raw_reply(bus, param_raw(GET_STATUS, 1, sid))[3] == 0xEE
+    bad = int.from_bytes(raw_reply(bus, param_raw(GET_STATUS, 1, 5))[4:], "little")
+    raw_reply(bus, bytes([0x00, 0x05]))                    # a 2-byte PARAM_REQ: LENGTH
+    assert int.from_bytes(raw_reply(bus, param_raw(GET_STATUS, 1, 5))[4:], "little") == bad + 1
+    assert int.from_bytes(raw_reply(bus, param_raw(GET_STATUS, 1, 2))[4:], "little") == 0   # RX_OVERRUNS
