@@ -55,8 +55,11 @@ class LaneMetrics:
     max_abs_error_after_tu_cm: float | None     # after t_u (PPC) or after the first window's start
     samples_outside_w1_after_tu: int | None
     time_to_band_s: float | None                # from then on |e| < w1 to the end
-    constraint_violations: int                  # samples of the measured x outside k_low < x < k_high
+    constraint_violations: int                  # samples of the measured x outside k_low < x < k_high (all)
     constraint_violations_true_x: int           # the same with the rig's true position
+    # the same split by who commands the pressure: the controller (output active), or the
+    # safe state after a fault (output inactive: e.g. a vented muscle under a pull is
+    # outside the band by physics, docs/firmware.md "The safe state")
     x_min_cm: float
     x_max_cm: float
     barrier_breaches: int | None                # PPC: clamped steps, whole run (TELEM_E; None: no telemetry)
@@ -69,6 +72,8 @@ class LaneMetrics:
     tv_pressure_cmd_kpa_per_s: float            # total variation of the pressure command per second (every tick)
     tv_pressure_needed_kpa_per_s: float | None  # the same for the static pressure the reference needs
     chatter_ratio: float | None                 # tv_pressure_cmd / tv_pressure_needed (1 = no more motion than needed)
+    constraint_violations_controlled: int = 0   # samples with the output active
+    constraint_violations_safe_state: int = 0   # samples in the safe state (output inactive)
     final_state: str = ""
     final_fault_code: str = ""
     extra: dict[str, Any] = field(default_factory=dict)
@@ -83,13 +88,18 @@ def lane_metrics(label: str, mode: str, t_s: np.ndarray, e_cm: np.ndarray, x_mea
                  x_true_cm: np.ndarray, v_true_cm_s: np.ndarray, p_cmd_kpa: np.ndarray,
                  windows: list[tuple[float, float]], band: tuple[float, float], t_u_s: float | None,
                  w1_cm: float | None, telem: dict[str, np.ndarray] | None,
-                 p_needed_kpa: np.ndarray | None = None, t_needed_s: np.ndarray | None = None) -> LaneMetrics:
+                 p_needed_kpa: np.ndarray | None = None, t_needed_s: np.ndarray | None = None,
+                 output_active: np.ndarray | None = None) -> LaneMetrics:
     lo, hi = band
     after = t_s >= (t_u_s if t_u_s is not None else (windows[0][0] if windows else 0.0))
     max_after = float(np.max(np.abs(e_cm[after]))) if after.any() else None
     outside_after = int(np.sum(np.abs(e_cm[after]) >= w1_cm)) if (w1_cm and after.any()) else None
     viol = int(np.sum((x_meas_cm <= lo) | (x_meas_cm >= hi)))
     viol_true = int(np.sum((x_true_cm <= lo) | (x_true_cm >= hi)))
+    outside = (x_meas_cm <= lo) | (x_meas_cm >= hi)
+    active = np.ones(len(x_meas_cm), bool) if output_active is None else np.asarray(output_active).astype(bool)
+    viol_controlled = int(np.sum(outside & active))
+    viol_safe = int(np.sum(outside & ~active))
     breaches = breaches_after = None
     peak_v_est = peak_u = tv_u = None
     if telem is not None and len(telem.get("t_s", [])):
@@ -121,4 +131,5 @@ def lane_metrics(label: str, mode: str, t_s: np.ndarray, e_cm: np.ndarray, x_mea
         peak_u=peak_u, peak_pressure_cmd_kpa=float(np.max(p_cmd_kpa)) if len(p_cmd_kpa) else math.nan,
         tv_u_per_s=tv_u, tv_pressure_cmd_kpa_per_s=tv_p, tv_pressure_needed_kpa_per_s=tv_need,
         chatter_ratio=chatter,
+        constraint_violations_controlled=viol_controlled, constraint_violations_safe_state=viol_safe,
     )

@@ -36,10 +36,11 @@ import can
 from pmactl import identity
 from pmactl.client import NoReply, PmaError, PmaNode, frame_filters
 from pmactl.nodedbc import write_node_dbc
+from pmactl.rules import RuleError, set_order
 
 from .fw_process import BUILD_HINT, FW_HOST, FirmwareProcess
 from .rig import Rig
-from .scenario import Controller, Scenario, protocol
+from .scenario import RULE_PARAMS, Controller, Scenario, protocol
 from .summary import PHASE_ARMED, PHASE_IDLE, PHASE_RUNNING, TELEM_FIELDS, LaneResult, Recorder, summarise
 
 REPLY_TIMEOUT_S = 10.0
@@ -243,7 +244,18 @@ class Runner:
 
     def _configure(self) -> None:
         for lane in self.lanes:
-            for name, value in lane.params.items():
+            # in an order that keeps every rule a SET enforces (docs/parameters.md: e.g. an
+            # 11-bit ADC's adc.raw_min_counts below the default wire-break level needs
+            # adc.wire_break_below_counts first); the rules' parameters as the node has them
+            try:
+                current = {name: lane.client.get(name) for name in RULE_PARAMS}
+                order = set_order(current, lane.params)
+            except RuleError as e:
+                raise RunError(f"node {lane.node} ({lane.ctrl.label}): {e}") from e
+            except NoReply as e:
+                raise RunError(f"node {lane.node} ({lane.ctrl.label}) does not answer PARAM_REQ: {e}") from e
+            for name in order:
+                value = lane.params[name]
                 try:
                     lane.client.set(name, value)
                 except PmaError as e:

@@ -49,7 +49,13 @@ from typing import Any
 
 from pmactl.protocol import Protocol, load_protocol
 
+from pmactl.rules import broken_rule
+
 from .rig_params import RigParams
+
+# the parameters the rules a SET enforces involve (docs/parameters.md, rules 1-5)
+RULE_PARAMS = ("adc.gain_cm_per_count", "adc.raw_min_counts", "adc.raw_max_counts",
+               "adc.wire_break_below_counts", "dac.counts_per_kpa", "dac.min_counts", "dac.max_counts")
 
 SCENARIO_DIR = Path(__file__).resolve().parent / "scenarios"
 
@@ -337,7 +343,7 @@ def parse(data: dict[str, Any], path: Path | None = None) -> Scenario:
     if expect.fault_code not in proto.enum_names("HEARTBEAT", "FaultCode").values():
         raise ScenarioError(f"{where}: [expect] fault_code {expect.fault_code!r} unknown")
 
-    return Scenario(
+    scenario = Scenario(
         name=str(data["name"]), title=str(data.get("title", data["name"])),
         description=str(data.get("description", "")), path=path, duration_s=duration,
         quick_duration_s=quick, windows=windows, paper=data.get("paper"),
@@ -346,3 +352,29 @@ def parse(data: dict[str, Any], path: Path | None = None) -> Scenario:
         settle_s=_num(f"{where}: settle_s", data.get("settle_s", 0.5), 0.05, 60.0),
         armed_s=_num(f"{where}: armed_s", data.get("armed_s", 1.0), 0.05, 60.0),
     )
+    _check_rules(where, scenario)
+    return scenario
+
+
+def _check_rules(where: str, scenario: "Scenario") -> None:
+    """What the node would refuse: every controller's whole set (the defaults, the rig's
+    wiring, the scenario's and the controller's parameters) must keep every rule between
+    parameters (docs/parameters.md), the ones SET enforces and the ones ARM checks."""
+    proto = protocol()
+    defaults = {p.name: p.default for p in proto.params}
+    for ctrl in scenario.controllers:
+        values = {**defaults, **scenario.node_params(ctrl)}
+        rule = broken_rule(values)
+        if rule:
+            names = {1: "adc.gain_cm_per_count != 0",
+                     2: "adc.raw_min_counts <= adc.raw_max_counts",
+                     3: "adc.wire_break_below_counts <= adc.raw_min_counts",
+                     4: "dac.counts_per_kpa != 0", 5: "dac.min_counts <= dac.max_counts",
+                     6: "act.polarity is -1 or +1", 7: "0 <= act.p_min_kpa < act.p_max_kpa",
+                     8: "act.p_min_kpa <= act.p0_kpa <= act.p_max_kpa",
+                     9: "safety.safe_kpa <= act.p_max_kpa (FIXED)",
+                     10: "safety.x_min_cm < safety.x_max_cm", 11: "ctrl.u_min < ctrl.u_max",
+                     12: "p0 + polarity * kpa_per_u * u within act.p_min_kpa..p_max_kpa "
+                         "for u = ctrl.u_min, ctrl.u_max"}
+            raise ScenarioError(f"{where}: controller {ctrl.label}: the parameter set breaks rule "
+                                f"{rule} ({names[rule]}; docs/parameters.md), which the node refuses")

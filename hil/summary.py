@@ -82,7 +82,8 @@ def summarise(sc: Scenario, lanes: list[LaneResult], *, quick: bool, duration_s:
         "scenario": sc.name, "title": sc.title, "file": str(sc.path) if sc.path else None,
         "quick": quick, "duration_s": duration_s, "period_s": period_s,
         "windows": [list(w) for w in windows], "paper": sc.paper,
-        "rmste": {}, "max_abs_error_after_tu": {}, "constraint_violations": {}, "barrier_breaches": {},
+        "rmste": {}, "max_abs_error_after_tu": {}, "constraint_violations": {},
+        "constraint_violations_controlled": {}, "constraint_violations_safe_state": {}, "barrier_breaches": {},
         "fault_code": {}, "state": {}, "start_result": {}, "controllers": lanes_out,
         "expect": {"state": sc.expect.state, "fault_code": sc.expect.fault_code,
                    "start_result": sc.expect.start_result},
@@ -135,15 +136,21 @@ def summarise(sc: Scenario, lanes: list[LaneResult], *, quick: bool, duration_s:
                          d["p_cmd_kpa"][run], windows, band, sc.t_u_s(lane.ctrl),
                          sc.w1_cm(lane.ctrl) if lane.ctrl.mode == "PPC" else None,
                          telem if "t_s" in telem else None,
-                         p_need[ok] if ok.sum() > 1 else None, t[sub][ok] if ok.sum() > 1 else None)
+                         p_need[ok] if ok.sum() > 1 else None, t[sub][ok] if ok.sum() > 1 else None,
+                         output_active=d["output_active"][run])
         m.final_state, m.final_fault_code = lane.state, lane.fault_code
         info.update(m.to_dict())
         # the same windows on the rig's true position (the sensor's noise and quantisation left out)
         info["rmste_true_cm"] = rmste(t, d["x_true_cm"][run] - xr, windows)
-        info["reference_unreachable_samples"] = int((~ok).sum())
+        # named for what it counts: the reference against the rig's virgin static curve
+        # (no hysteresis, no friction, the initial load): a lower bound of what the muscle
+        # cannot reach; with strong hysteresis x may bottom out short of it all the same
+        info["reference_unreachable_virgin_curve_samples"] = int((~ok).sum())
         summary["rmste"][label] = m.rmste_cm
         summary["max_abs_error_after_tu"][label] = m.max_abs_error_after_tu_cm
         summary["constraint_violations"][label] = m.constraint_violations
+        summary["constraint_violations_controlled"][label] = m.constraint_violations_controlled
+        summary["constraint_violations_safe_state"][label] = m.constraint_violations_safe_state
         summary["barrier_breaches"][label] = m.barrier_breaches
         lanes_out[label] = info
     ok_all = (not errors and not interrupted and all(

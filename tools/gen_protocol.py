@@ -49,6 +49,15 @@ class TableError(Exception):
     pass
 
 
+def load_rules(path: Path = PARAMS) -> list[dict[str, Any]]:
+    """The [[rule]] tables of params.toml, by number (1, 2, ... without gaps)."""
+    with open(path, "rb") as f:
+        rules = tomllib.load(f).get("rule", [])
+    if [r["number"] for r in rules] != list(range(1, len(rules) + 1)):
+        raise TableError("params.toml: the rules must be numbered 1, 2, ... in order")
+    return rules
+
+
 def load_params(path: Path = PARAMS) -> list[dict[str, Any]]:
     """Reads and validates the parameter table; sorted by id."""
     with path.open("rb") as f:
@@ -167,15 +176,23 @@ def gen_param_doc(params: list[dict[str, Any]]) -> str:
            "(`PMA_ERR_TYPE`, -19), the id is unknown (`PMA_ERR_UNKNOWN_ID`, -18), or the state forbids it\n",
            "(`PMA_ERR_STATE`, -20). Access: *live* any state; *stopped* not while RUNNING (takes effect\n",
            "at the next START); *idle* only while the output is inactive (BOOT, IDLE, FAULT).\n",
-           "Rules between parameters (for example `ctrl.u_min` < `ctrl.u_max`, `act.p_min_kpa` <\n",
-           "`act.p_max_kpa`, a valid sensor scaling) are checked at ARM and START, which are refused\n",
-           "with the error (`PMA_ERR_RANGE`, `PMA_ERR_NOT_FINITE`) when one does not hold; START also\n",
-           "checks the controller's own rules (for example `PMA_ERR_BAND`: the reference must keep\n",
-           "`ppc.w1_cm` inside the constraints). The sensor and DAC scalings (`adc.*`, `dac.*`) act\n",
-           "even while the output is inactive, so every SET must keep each of them valid as a whole\n",
-           "(for example `adc.raw_min_counts` <= `adc.raw_max_counts`, `dac.counts_per_kpa` not 0),\n",
-           "else it is refused with `PMA_ERR_RANGE`.\n\n",
-           "Types: f32 (IEEE 754 single), u32, i32; enumerations are u32 (values listed).\n\n"]
+           "Rules between parameters (the table below) are refused with `PMA_ERR_RANGE` (-3), and\n",
+           "nothing changes; GET_STATUS (PARAM_REQ Op 9) of Id 1, LAST_RULE, then gives the number of\n",
+           "the rule that refused (docs/protocol.md, \"Status values\"). START also checks the\n",
+           "controller's own rules (for example `PMA_ERR_BAND`: the reference must keep `ppc.w1_cm`\n",
+           "inside the constraints).\n\n",
+           "Types: f32 (IEEE 754 single), u32, i32; enumerations are u32 (values listed).\n\n",
+           "## Rules between parameters\n\n",
+           "*checked* `set`: at every SET, because the sensor and DAC scalings act even while the\n",
+           "output is inactive (also a stored set that breaks one is not loaded); so a change that\n",
+           "would pass through a state that breaks the rule needs the order given. `arm`: at ARM and\n",
+           "START only, so the parameters involved can be set in any order while IDLE, and ARM is\n",
+           "refused until all of them agree.\n\n",
+           "| rule | name | what must hold | checked | order of the changes |\n",
+           "|---:|---|---|---|---|\n"]
+    for r in load_rules():
+        out.append(f"| {r['number']} | `{r['name']}` | {r['rule']} | {r['checked']} | {r['order']} |\n")
+    out.append("\n")
     groups: dict[str, list[dict[str, Any]]] = {}
     for p in params:
         groups.setdefault(p["name"].split(".")[0], []).append(p)

@@ -105,9 +105,44 @@ int pma_app_check_param_groups(const pma_params_t *p)
     return rc != PMA_OK ? rc : pma_dac_validate_scaling(&ds);
 }
 
-/* Rules between parameters, checked at ARM and START (docs/parameters.md). */
-static int check_cross_params(const pma_params_t *p)
+/* The pressure p(u) = p0 + polarity * kpa_per_u * u at u, and whether it lies in
+ * [p_min, p_max] (within float rounding: a set derived as u = p - p0 holds). */
+static int pressure_in_range(const pma_params_t *p, float u)
 {
+    const float k = (float)p->act_polarity * p->act_kpa_per_u;
+    const float pu = p->act_p0_kpa + k * u;
+    const float tol = 1e-3f + 1e-6f * fabsf(p->act_p_max_kpa);
+    return pu >= p->act_p_min_kpa - tol && pu <= p->act_p_max_kpa + tol;
+}
+
+int pma_app_param_rule(const pma_params_t *p, int set_only)
+{
+    /* checked at every SET (the scalings act while the output is inactive too) */
+    if (p->adc_gain_cm_per_count == 0.0f) return PMA_RULE_ADC_GAIN;
+    if (p->adc_raw_min_counts > p->adc_raw_max_counts) return PMA_RULE_ADC_RAW_ORDER;
+    if (p->adc_wire_break_below_counts > p->adc_raw_min_counts) return PMA_RULE_ADC_WIRE_BREAK;
+    if (p->dac_counts_per_kpa == 0.0f) return PMA_RULE_DAC_GAIN;
+    if (p->dac_min_counts > p->dac_max_counts) return PMA_RULE_DAC_ORDER;
+    if (set_only) return PMA_RULE_NONE;
+    /* checked at ARM and START */
+    if (p->act_polarity != 1 && p->act_polarity != -1) return PMA_RULE_ACT_POLARITY;
+    if (!(p->act_p_min_kpa >= 0.0f && p->act_p_min_kpa < p->act_p_max_kpa)) return PMA_RULE_ACT_P_ORDER;
+    if (!(p->act_p0_kpa >= p->act_p_min_kpa && p->act_p0_kpa <= p->act_p_max_kpa)) return PMA_RULE_ACT_P0;
+    if (p->safety_safe_mode == PMA_SAFE_FIXED && !(p->safety_safe_kpa <= p->act_p_max_kpa)) {
+        return PMA_RULE_SAFE_KPA;
+    }
+    if (!(p->safety_x_min_cm < p->safety_x_max_cm)) return PMA_RULE_X_ORDER;
+    if (!(p->ctrl_u_min < p->ctrl_u_max)) return PMA_RULE_U_ORDER;
+    if (!pressure_in_range(p, p->ctrl_u_min) || !pressure_in_range(p, p->ctrl_u_max)) {
+        return PMA_RULE_U_PRESSURE;
+    }
+    return PMA_RULE_NONE;
+}
+
+/* Rules between parameters, checked at ARM and START (docs/parameters.md). */
+static int check_cross_params(pma_app_t *app)
+{
+    const pma_params_t *p = &app->params;
     pma_adc_scaling_t as;
     pma_dac_scaling_t ds;
     pma_actuator_config_t ac;
@@ -119,6 +154,9 @@ static int check_cross_params(const pma_params_t *p)
     if (rc == PMA_OK) rc = pma_actuator_validate(&ac);
     if (rc == PMA_OK && !(p->safety_x_min_cm < p->safety_x_max_cm)) rc = PMA_ERR_RANGE;
     if (rc == PMA_OK && !(p->ctrl_u_min < p->ctrl_u_max)) rc = PMA_ERR_RANGE;
+    const int rule = pma_app_param_rule(p, 0);
+    if (rc == PMA_OK && rule != PMA_RULE_NONE) rc = PMA_ERR_RANGE;
+    if (rc == PMA_ERR_RANGE) app->last_rule = (uint8_t)rule;
     return rc;
 }
 
@@ -224,7 +262,7 @@ static int cmd_arm(pma_app_t *app)
     case PMA_STATE_FAULT: return PMA_ERR_FAULT;
     default: return PMA_ERR_STATE;
     }
-    int rc = check_cross_params(&app->params);
+    int rc = check_cross_params(app);
     if (rc != PMA_OK) return rc;
     if (pma_app_bridge_on(app) &&
         app->ticks_since_sample >= app->params.safety_sensor_timeout_ticks) {
@@ -249,7 +287,7 @@ static int cmd_start(pma_app_t *app)
 {
     if (app->state == PMA_STATE_FAULT) return PMA_ERR_FAULT;
     if (app->state != PMA_STATE_ARMED) return PMA_ERR_STATE;
-    int rc = check_cross_params(&app->params);
+    int rc = check_cross_params(app);
     if (rc == PMA_OK) rc = pma_ctrl_start(&app->ctrl, &app->params, app->period_s);
     if (rc != PMA_OK) return rc;
     app->run_ticks = 0;
@@ -484,6 +522,36 @@ void pma_app_poll(pma_app_t *app)
     }
 }
 
+/* A request to this node: a frame that is answered (COMMAND, PARAM_REQ). */
+static int is_request(const pma_app_t *app, const pma_can_frame_t *f)
+{
+    const uint16_t base = (uint16_t)(f->id & PMA_BASE_ID_MASK);
+    return f->id <= PMA_CAN_ID_MAX && (f->id & PMA_NODE_ID_MASK) == app->node_id &&
+           (base == PMA_PROTO_COMMAND_FRAME_ID || base == PMA_PROTO_PARAM_REQ_FRAME_ID) &&
+           f->id != PMA_PROTO_ESTOP_ALL_FRAME_ID;
+}
+
+/* The request queue is full and f arrives: a COMMAND (START, STOP, DISARM ...)
+ * takes the place of the newest queued PARAM_REQ, which is dropped; the order of
+ * the others is kept. Returns 0 when f is to be dropped instead. */
+static int evict_param_req(pma_app_t *app, const pma_can_frame_t *f)
+{
+    if ((f->id & PMA_BASE_ID_MASK) != PMA_PROTO_COMMAND_FRAME_ID) return 0;
+    for (unsigned k = app->req_q_count; k-- > 0;) {
+        const unsigned at = (app->req_q_head + k) % PMA_APP_PARAM_REQ_QUEUE;
+        if ((app->req_q[at].id & PMA_BASE_ID_MASK) != PMA_PROTO_PARAM_REQ_FRAME_ID) continue;
+        for (unsigned j = k; j + 1u < app->req_q_count; ++j) {
+            app->req_q[(app->req_q_head + j) % PMA_APP_PARAM_REQ_QUEUE] =
+                app->req_q[(app->req_q_head + j + 1u) % PMA_APP_PARAM_REQ_QUEUE];
+        }
+        --app->req_q_count;
+        ++app->counters.frames_rx;
+        ++app->counters.req_dropped;
+        return 1;
+    }
+    return 0;
+}
+
 int pma_app_step(pma_app_t *app)
 {
     if (app == NULL) return PMA_ERR_NULL;
@@ -491,12 +559,37 @@ int pma_app_step(pma_app_t *app)
     const int rc = pma_hal_tick_wait(&late);
     pma_can_frame_t f;
     const uint16_t sample_id = (uint16_t)(PMA_PROTO_PLANT_SENSOR_FRAME_ID | app->node_id);
-    for (unsigned i = 0; i < PMA_APP_RX_PER_STEP && pma_hal_can_recv(&f) == PMA_OK; ++i) {
+    unsigned fresh = 0; /* requests queued in this iteration */
+    /* lockstep: the port reported a tick, i.e. the sample is in its RX queue: read up to
+     * it whatever the bound (the queue is finite), so that the tick has its sample */
+    const int need_sample = app->plat.lockstep && rc == PMA_OK;
+    for (unsigned i = 0; (i < PMA_APP_RX_PER_STEP || need_sample) && pma_hal_can_recv(&f) == PMA_OK; ++i) {
+        if (is_request(app, &f)) {
+            /* answered later in this iteration, in order, at most
+             * PMA_APP_PARAM_REQ_PER_STEP of them: a flood of requests never
+             * delays the tick or the frames that feed it */
+            if (app->req_q_count == PMA_APP_PARAM_REQ_QUEUE && !evict_param_req(app, &f)) {
+                ++app->counters.frames_rx;
+                ++app->counters.req_dropped; /* dropped unanswered */
+                continue;
+            }
+            app->req_q[(app->req_q_head + app->req_q_count) % PMA_APP_PARAM_REQ_QUEUE] = f;
+            ++app->req_q_count;
+            ++fresh;
+            continue;
+        }
         pma_app_handle_frame(app, &f);
         /* lockstep: each sample is its own tick; later frames (perhaps the
          * next sample) wait for the next iteration, which the port grants */
         if (app->plat.lockstep && f.id == sample_id && f.dlc == PMA_PROTO_PLANT_SENSOR_LENGTH) break;
     }
+    for (unsigned n = 0; n < PMA_APP_PARAM_REQ_PER_STEP && app->req_q_count > 0; ++n) {
+        const pma_can_frame_t req = app->req_q[app->req_q_head];
+        app->req_q_head = (uint8_t)((app->req_q_head + 1u) % PMA_APP_PARAM_REQ_QUEUE);
+        --app->req_q_count;
+        pma_app_handle_frame(app, &req);
+    }
+    app->counters.req_deferred += fresh < app->req_q_count ? fresh : app->req_q_count;
     if (rc == PMA_OK) pma_app_tick(app, late);
     pma_app_poll(app);
     pma_hal_watchdog_kick();

@@ -66,6 +66,7 @@ typedef enum pma_param_op {
     PMA_PARAM_OP_GET_DEFAULT = 6,
     PMA_PARAM_OP_NEXT_ID = 7,
     PMA_PARAM_OP_LOAD = 8,
+    PMA_PARAM_OP_GET_STATUS = 9,   /* a counter or status value by Id (PMA_STATUS_*) */
 } pma_param_op_t;
 
 /* HEARTBEAT Flags signal. */
@@ -92,9 +93,50 @@ typedef enum pma_param_op {
 #define PMA_NODE_ID_MASK 0x00Fu
 #define PMA_BASE_ID_MASK 0x7F0u
 
-/* Frames handled per loop iteration at most (bounds the loop under a flood;
- * the rest wait in the RX queue for the next iteration). */
-#define PMA_APP_RX_PER_STEP 64u
+/* Frames taken from the CAN RX queue per loop iteration at most (bounds the
+ * loop under a flood; the rest wait in the RX queue for the next iteration).
+ * Taking one is cheap: a PARAM_REQ is only queued (below), every other frame
+ * (emergency stops, plant bridge, commands, set-points, host heartbeats) is
+ * handled at once, so the control-relevant frames never wait for requests. */
+#define PMA_APP_RX_PER_STEP 128u
+/* Requests (COMMAND, PARAM_REQ: the frames that are answered) handled per loop
+ * iteration at most (a reply, perhaps a flash write, each), in the order received,
+ * and the depth of the queue of those that wait for a later iteration; a request
+ * that finds the queue full is dropped without a reply (counted: GET_STATUS
+ * RX_DEFERRED, RX_DROPPED; docs/protocol.md). */
+#define PMA_APP_PARAM_REQ_PER_STEP 8u
+#define PMA_APP_PARAM_REQ_QUEUE 16u
+
+/* Rules between parameters (docs/parameters.md "Rules between parameters"):
+ * the number GET_STATUS LAST_RULE reports for the last SET, ARM or START that
+ * one of them refused with PMA_ERR_RANGE. */
+enum {
+    PMA_RULE_NONE = 0,
+    PMA_RULE_ADC_GAIN = 1,         /* adc.gain_cm_per_count != 0 */
+    PMA_RULE_ADC_RAW_ORDER = 2,    /* adc.raw_min_counts <= adc.raw_max_counts */
+    PMA_RULE_ADC_WIRE_BREAK = 3,   /* adc.wire_break_below_counts <= adc.raw_min_counts */
+    PMA_RULE_DAC_GAIN = 4,         /* dac.counts_per_kpa != 0 */
+    PMA_RULE_DAC_ORDER = 5,        /* dac.min_counts <= dac.max_counts */
+    PMA_RULE_ACT_POLARITY = 6,     /* act.polarity is -1 or +1 */
+    PMA_RULE_ACT_P_ORDER = 7,      /* 0 <= act.p_min_kpa < act.p_max_kpa */
+    PMA_RULE_ACT_P0 = 8,           /* act.p_min_kpa <= act.p0_kpa <= act.p_max_kpa */
+    PMA_RULE_SAFE_KPA = 9,         /* safety.safe_mode FIXED: safety.safe_kpa <= act.p_max_kpa */
+    PMA_RULE_X_ORDER = 10,         /* safety.x_min_cm < safety.x_max_cm */
+    PMA_RULE_U_ORDER = 11,         /* ctrl.u_min < ctrl.u_max */
+    PMA_RULE_U_PRESSURE = 12,      /* p(ctrl.u_min), p(ctrl.u_max) in act.p_min_kpa..act.p_max_kpa */
+};
+
+/* PARAM_REQ Op GET_STATUS (9): Id selects one of the node's counters or status
+ * values, answered as U32 (docs/protocol.md "Status values"). */
+enum {
+    PMA_STATUS_LAST_RULE = 1,      /* PMA_RULE_* of the last refusal by a rule, 0: none */
+    PMA_STATUS_RX_OVERRUNS = 2,    /* frames lost in the CAN RX queue (controller, driver, socket) */
+    PMA_STATUS_RX_DEFERRED = 3,    /* requests (COMMAND, PARAM_REQ) answered in a later loop iteration */
+    PMA_STATUS_RX_DROPPED = 4,     /* requests dropped unanswered (request queue full) */
+    PMA_STATUS_FRAMES_BAD = 5,     /* this node's frames with a wrong length or undecodable */
+    PMA_STATUS_TICKS = 6,          /* control ticks since start-up (mod 2^32) */
+    PMA_STATUS_FRAMES_RX = 7,      /* frames handled since start-up (mod 2^32) */
+};
 
 /* While bus-off, recovery is requested at most this often (a request may
  * cost a netlink message or a controller re-initialisation). */
@@ -120,6 +162,8 @@ typedef struct pma_app_counters {
     uint32_t tx_failed;            /* frames the HAL did not queue */
     uint32_t bridge_gaps, bridge_repeats;
     uint32_t setpoints_rejected;
+    uint32_t req_deferred;         /* requests (COMMAND, PARAM_REQ) answered in a later iteration */
+    uint32_t req_dropped;          /* requests dropped: the queue was full */
 } pma_app_counters_t;
 
 typedef struct pma_app {
@@ -161,6 +205,10 @@ typedef struct pma_app {
     float p_kpa;
     uint16_t dac_counts;
     pma_app_counters_t counters;
+    uint8_t last_rule;             /* PMA_RULE_* of the last refusal by a rule */
+    /* requests waiting to be handled (a ring), in the order received */
+    pma_can_frame_t req_q[PMA_APP_PARAM_REQ_QUEUE];
+    uint8_t req_q_head, req_q_count;
 } pma_app_t;
 
 /* Starts the application on an initialised HAL (pma_hal_init() first): BOOT,

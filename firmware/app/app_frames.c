@@ -54,10 +54,7 @@ static void send_ack(pma_app_t *app, uint8_t command, uint8_t arg, int rc)
 static void send_param_resp(pma_app_t *app, uint8_t op, uint16_t id, int rc, uint8_t type,
                             pma_param_value_t v)
 {
-    if (type > PMA_PARAM_I32) { /* an undefined Type echoed from a request: keep the reply decodable */
-        type = PMA_PARAM_U32;
-        v.u32 = 0;
-    }
+    if (type > PMA_PARAM_I32) v.u32 = 0; /* an undefined Type, echoed from the request: no value */
     struct pma_proto_param_resp_t m;
     memset(&m, 0, sizeof m);
     m.op = (uint8_t)(op & 0x0Fu);
@@ -236,6 +233,24 @@ static int whole_set_op(pma_app_t *app, uint8_t op)
     }
 }
 
+/* GET_STATUS: the node's counters and status values (PMA_STATUS_*, app.h). */
+static int status_value(const pma_app_t *app, uint16_t id, uint32_t *out)
+{
+    pma_can_status_t cs;
+    switch (id) {
+    case PMA_STATUS_LAST_RULE: *out = app->last_rule; return PMA_OK;
+    case PMA_STATUS_RX_OVERRUNS:
+        *out = pma_hal_can_status(&cs) == PMA_OK ? cs.rx_overruns : 0u;
+        return PMA_OK;
+    case PMA_STATUS_RX_DEFERRED: *out = app->counters.req_deferred; return PMA_OK;
+    case PMA_STATUS_RX_DROPPED: *out = app->counters.req_dropped; return PMA_OK;
+    case PMA_STATUS_FRAMES_BAD: *out = app->counters.frames_bad; return PMA_OK;
+    case PMA_STATUS_TICKS: *out = (uint32_t)app->ticks; return PMA_OK;
+    case PMA_STATUS_FRAMES_RX: *out = app->counters.frames_rx; return PMA_OK;
+    default: *out = 0; return PMA_ERR_UNKNOWN_ID;
+    }
+}
+
 static void on_param_req(pma_app_t *app, const pma_can_frame_t *f)
 {
     const pma_param_value_t zero = {.u32 = 0};
@@ -262,7 +277,9 @@ static void on_param_req(pma_app_t *app, const pma_can_frame_t *f)
         rc = pma_param_get(&app->params, id, &type, &v);
         break;
     case PMA_PARAM_OP_SET: {
-        if (req_type > PMA_PARAM_I32) {
+        if (d == NULL) {
+            rc = PMA_ERR_UNKNOWN_ID; /* the id first, whatever the Type (docs/protocol.md) */
+        } else if (req_type > PMA_PARAM_I32) {
             rc = PMA_ERR_TYPE;
         } else {
             pma_param_value_t nv;
@@ -274,6 +291,7 @@ static void on_param_req(pma_app_t *app, const pma_can_frame_t *f)
                 pma_params_t trial = app->params;
                 (void)pma_param_set(&trial, id, (pma_param_type_t)req_type, nv, pma_app_phase(app));
                 rc = pma_app_check_param_groups(&trial);
+                if (rc == PMA_ERR_RANGE) app->last_rule = (uint8_t)pma_app_param_rule(&trial, 1);
                 if (rc == PMA_OK) app->params = trial;
             }
             if (rc == PMA_OK) {
@@ -308,6 +326,10 @@ static void on_param_req(pma_app_t *app, const pma_can_frame_t *f)
         v.u32 = next;
         break;
     }
+    case PMA_PARAM_OP_GET_STATUS:
+        type = PMA_PARAM_U32;
+        rc = status_value(app, id, &v.u32);
+        break;
     default:
         rc = PMA_ERR_UNKNOWN_COMMAND;
         break;

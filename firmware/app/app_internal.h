@@ -9,6 +9,9 @@ void pma_app_adc_scaling(const pma_params_t *p, pma_adc_scaling_t *s);
 int pma_app_apply_timing(pma_app_t *app);
 int pma_app_load_params(pma_app_t *app);
 int pma_app_check_param_groups(const pma_params_t *p);
+/* The first rule between parameters that p breaks (PMA_RULE_*, app.h), 0 when all
+ * hold; set_only: only the rules every SET enforces (the sensor and DAC scalings). */
+int pma_app_param_rule(const pma_params_t *p, int set_only);
 void pma_app_sync_bridge(pma_app_t *app);
 
 void pma_app_send_heartbeat(pma_app_t *app);

@@ -172,6 +172,7 @@ static result_t run(uint8_t bridge, uint32_t mode, uint32_t ref, float offset_cm
     start_node(bridge, (float)pl.x);
     for (int i = 0; i < 5; ++i) tick_with_plant();
     set_f32(PMA_PARAM_ACT_P0_KPA, 150.0f);
+    set_f32(PMA_PARAM_CTRL_U_MIN, -150.0f); /* p0 + u_min = act.p_min_kpa (rule 12) */
     command_ok(PMA_CMD_SELECT_CONTROLLER, (uint8_t)mode, PMA_OK);
     command_ok(PMA_CMD_SELECT_REFERENCE, (uint8_t)ref, PMA_OK);
     set_f32(PMA_PARAM_REF_OFFSET_CM, offset_cm);

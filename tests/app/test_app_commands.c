@@ -464,7 +464,7 @@ static void test_start_refused_bad_params(void)
     set_f32(PMA_PARAM_CTRL_U_MIN, 400.0f);
     command_ok(PMA_CMD_START, 0, PMA_ERR_RANGE);
     assert_state(app.state, PMA_STATE_ARMED);
-    set_f32(PMA_PARAM_CTRL_U_MIN, -400.0f);
+    set_f32(PMA_PARAM_CTRL_U_MIN, -300.0f);
     /* velocity estimator bandwidth above half the tick rate */
     set_f32(PMA_PARAM_VEL_FC_HZ, 600.0f);
     TEST_ASSERT_LESS_THAN(0, command(PMA_CMD_START, 0).result);

@@ -80,7 +80,7 @@ static void test_defaults_equal_table(void)
     TEST_ASSERT_EQUAL_INT(1000u, p.sys_tick_hz);
     TEST_ASSERT_EQUAL_INT(100u, p.sys_heartbeat_ms);
     TEST_ASSERT_EQUAL_INT(PMA_CTRL_MODE_PPC, p.ctrl_mode);
-    TEST_ASSERT_TRUE(p.ctrl_u_min == -400.0f && p.ctrl_u_max == 400.0f);
+    TEST_ASSERT_TRUE(p.ctrl_u_min == -300.0f && p.ctrl_u_max == 300.0f);
     TEST_ASSERT_TRUE(p.ref_offset_cm == -1.5f);
     TEST_ASSERT_EQUAL_INT(1, p.act_polarity);
     TEST_ASSERT_TRUE(p.act_p0_kpa == 300.0f);

@@ -211,8 +211,8 @@ static void test_param_malformed_requests(void)
         const presp_t g = param_req_raw(PMA_PARAM_OP_SAVE, 0, 0, vu(0), (uint8_t)reserved);
         assert_status(g.result, PMA_ERR_UNKNOWN_COMMAND);
     }
-    /* unknown ops 9..15 */
-    for (uint8_t op = 9; op <= 15; ++op) {
+    /* unknown ops 10..15 (9 is GET_STATUS) */
+    for (uint8_t op = 10; op <= 15; ++op) {
         const presp_t r = param_req(op, PMA_PARAM_U32, PMA_PARAM_TELEM_MASK, vu(3));
         assert_status(r.result, PMA_ERR_UNKNOWN_COMMAND);
     }

@@ -8,7 +8,7 @@ import pytest
 
 from test_fw_lib import (CMD, COUNTS_MID, FAULT, PROTO, STATE, Rig, arm, arm_and_start,
                          base_id, cm_to_counts, fresh_heartbeat, query_state, sentinel_get, start,
-                         replies_of)
+                         replies_of, default_of)
 
 NODE = 3
 
@@ -70,7 +70,7 @@ def test_commands_in_idle(firmware, bus) -> None:
     rig.tick(COUNTS_MID)
     node.set("ctrl.u_min", 500.0)                             # u_min >= u_max: a cross rule
     expect(node, "ARM", 0, "RANGE", "IDLE")
-    node.set("ctrl.u_min", -400.0)
+    node.set("ctrl.u_min", default_of("ctrl.u_min"))
     node.set("act.p0_kpa", 700.0)                             # p0 above act.p_max_kpa
     expect(node, "ARM", 0, "RANGE", "IDLE")
     node.set("act.p0_kpa", 300.0)
@@ -105,7 +105,7 @@ def test_commands_in_armed(firmware, bus) -> None:
     node.set("ref.offset_cm", -1.5)
     node.set("ctrl.u_min", 500.0)                             # START checks u_min < u_max too
     expect(node, "START", 0, "RANGE", "ARMED")
-    node.set("ctrl.u_min", -400.0)
+    node.set("ctrl.u_min", default_of("ctrl.u_min"))
     expect(node, "START", 0, "OK", "RUNNING")
     expect(node, "STOP", 0, "OK", "ARMED")
     expect(node, "ESTOP", 0, "OK", "FAULT", "ESTOP")

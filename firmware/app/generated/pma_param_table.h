@@ -78,7 +78,7 @@ enum pma_param_id {
 
 #define PMA_PARAM_COUNT 68u
 /* CRC-32 of the table (pmactl.protocol.param_table_hash): DEVICE_INFO's ParamTableHash. */
-#define PMA_PARAM_TABLE_HASH 0x9FDE4E7Cu
+#define PMA_PARAM_TABLE_HASH 0x8C07141Fu
 
 #define PMA_SYS_PLANT_BRIDGE_OFF 0u
 #define PMA_SYS_PLANT_BRIDGE_ON 1u

@@ -174,6 +174,7 @@ extern "C" {
 #define PMA_PROTO_PARAM_REQ_OP_GET_DEFAULT_CHOICE (6u)
 #define PMA_PROTO_PARAM_REQ_OP_NEXT_ID_CHOICE (7u)
 #define PMA_PROTO_PARAM_REQ_OP_LOAD_CHOICE (8u)
+#define PMA_PROTO_PARAM_REQ_OP_GET_STATUS_CHOICE (9u)
 
 #define PMA_PROTO_PARAM_REQ_TYPE_F32_CHOICE (0u)
 #define PMA_PROTO_PARAM_REQ_TYPE_U32_CHOICE (1u)
@@ -188,6 +189,7 @@ extern "C" {
 #define PMA_PROTO_PARAM_RESP_OP_GET_DEFAULT_CHOICE (6u)
 #define PMA_PROTO_PARAM_RESP_OP_NEXT_ID_CHOICE (7u)
 #define PMA_PROTO_PARAM_RESP_OP_LOAD_CHOICE (8u)
+#define PMA_PROTO_PARAM_RESP_OP_GET_STATUS_CHOICE (9u)
 
 #define PMA_PROTO_PARAM_RESP_TYPE_F32_CHOICE (0u)
 #define PMA_PROTO_PARAM_RESP_TYPE_U32_CHOICE (1u)
@@ -536,7 +538,7 @@ struct pma_proto_setpoint_t {
 /**
  * Signals in message PARAM_REQ.
  *
- * Parameter access by id. Op 0 GET, 1 SET, 2 SAVE (all, to storage), 3 RESTORE_DEFAULTS (all, RAM), 4 GET_MIN, 5 GET_MAX, 6 GET_DEFAULT, 7 NEXT_ID (the first id above Id), 8 LOAD (all, from storage). Type selects the value signal; for SET it must be the parameter's type. Answered by PARAM_RESP.
+ * Parameter access by id. Op 0 GET, 1 SET, 2 SAVE (all, to storage), 3 RESTORE_DEFAULTS (all, RAM), 4 GET_MIN, 5 GET_MAX, 6 GET_DEFAULT, 7 NEXT_ID (the first id above Id), 8 LOAD (all, from storage), 9 GET_STATUS (a counter or status value of the node, by Id). Type selects the value signal; for SET it must be the parameter's type. Answered by PARAM_RESP.
  *
  * All signal values are as on the CAN bus.
  */

@@ -282,6 +282,15 @@ int pma_linux_can_open(const char *ifname, uint16_t tick_id, uint16_t tick_mask,
     if (setsockopt(can.fd, SOL_SOCKET, SO_RXQ_OVFL, &on, sizeof on) != 0) {
         return open_fail("SO_RXQ_OVFL");
     }
+    /* A receive buffer for bursts: a sender on the same CPU (a flood, vcan) can queue
+     * thousands of frames in one time slice before this process runs, and the
+     * default buffer (about 200 frames) would drop the sensor frames among them. A
+     * controller's FIFO plays this part on a board. SO_RCVBUFFORCE needs
+     * CAP_NET_ADMIN; without it SO_RCVBUF, up to net.core.rmem_max. Best effort. */
+    const int rcvbuf = PMA_HAL_LINUX_CAN_RCVBUF_BYTES;
+    if (setsockopt(can.fd, SOL_SOCKET, SO_RCVBUFFORCE, &rcvbuf, sizeof rcvbuf) != 0) {
+        (void)setsockopt(can.fd, SOL_SOCKET, SO_RCVBUF, &rcvbuf, sizeof rcvbuf);
+    }
     if (apply_filters(NULL, 0) != PMA_OK) {
         pma_linux_can_close();
         return PMA_ERR_IO;

@@ -43,6 +43,7 @@
 #define PMA_HAL_LINUX_NVM_MAX_BYTES (64u * 1024u * 1024u) /* block_size x block_count */
 #define PMA_HAL_LINUX_WATCHDOG_MAX_MS 60000u          /* pma_hal_watchdog_start() range 1..this */
 #define PMA_HAL_LINUX_CAN_RX_DEPTH 256u               /* frames in the port's RX ring */
+#define PMA_HAL_LINUX_CAN_RCVBUF_BYTES (1024 * 1024) /* the socket's receive buffer (best effort) */
 
 /* Exit statuses of the process (chosen clear of the shell's 126/127, of
  * 128 + signal numbers and of hil/with-vcan's 2 and 125). */

@@ -243,9 +243,34 @@ class Protocol:
         return bytes(m.encode(data or {}, scaling=False, strict=True))
 
     def decode(self, message: str, data: bytes) -> dict[str, Any]:
-        decoded = self.messages[message].decode(data, decode_choices=False, scaling=False)
-        assert isinstance(decoded, dict)            # not a container message
-        return dict(decoded)
+        """The signals of a frame. A multiplexed frame (PARAM_REQ, PARAM_RESP) whose
+        multiplexer (Type) has a value the DBC does not define, such as the Type 3..15
+        a node echoes from a request (docs/protocol.md), decodes to its plain signals
+        (Op, Type, Id, Result) without a value signal."""
+        m = self.messages[message]
+        try:
+            decoded = m.decode(data, decode_choices=False, scaling=False)
+            assert isinstance(decoded, dict)        # not a container message
+            return dict(decoded)
+        except cantools.database.DecodeError:
+            mux = [s for s in m.signals if s.is_multiplexer]
+            if len(mux) != 1 or mux[0].byte_order != "little_endian" or len(data) < m.length:
+                raise
+            sm = mux[0]
+            word = int.from_bytes(bytes(data), "little")
+            mask = (1 << sm.length) - 1
+            raw = (word >> sm.start) & mask
+            known = sorted(k for s in m.signals for k in (s.multiplexer_ids or []))
+            if not known or raw in known:
+                raise
+            patched = word & ~(mask << sm.start) | (known[0] << sm.start)
+            patched_sig = m.decode(patched.to_bytes(len(data), "little"), decode_choices=False,
+                                   scaling=False)
+            assert isinstance(patched_sig, dict)
+            sig = dict(patched_sig)
+            out = {s.name: sig[s.name] for s in m.signals if not s.multiplexer_ids and s.name in sig}
+            out[sm.name] = raw
+            return out
 
     def status_name(self, code: int) -> str:
         return self.status_names.get(code, f"status {code}")

@@ -33,6 +33,7 @@ import shutil
 from pathlib import Path
 from typing import Callable
 
+import transcript
 from fwhost import Run, pmactl_run
 
 
@@ -128,6 +129,11 @@ def test_tuning_session(firmware, plant, tmp_path: Path) -> None:
         for f in [*tmp_path.glob("*.png"), *tmp_path.glob("*.csv"), *tmp_path.glob("*.meta.json"),
                   tmp_path / "rig.json"]:
             shutil.copy(f, target.parent / f.name)
+
+    # docs/tuning.md quotes this session: its console blocks are this transcript (issue 16)
+    stale = transcript.stale_blocks(transcript.DOC.read_text(), run.text())
+    assert not stale, (f"docs/tuning.md differs from the session at the blocks starting {stale}: "
+                       "rewrite them with host/tests/integration/transcript.py (see its docstring)")
 
     runs = f"case2b {case2b}, tu05 {fast}, ff2 {ff}"
     # the same control time in every trial: ROWS rows, none lost (t 0.009 .. 7.999 s)
