@@ -308,8 +308,10 @@ class RigParams:
         return dataclasses.asdict(self)
 
     def replace(self, **changes: Any) -> "RigParams":
-        """A copy with changes given as 'group.name' or top-level names."""
-        data = self.to_dict()
+        """A copy with changes given as 'group.name' or top-level names. A change of
+        'profile' starts from that profile's values (the other changes on top)."""
+        base = RigParams.from_dict({"profile": changes.pop("profile")}) if "profile" in changes else self
+        data = base.to_dict()
         for key, value in changes.items():
             parts = key.replace("__", ".").split(".")
             node = data
