@@ -64,6 +64,8 @@ def mas_table() -> dict[str, float]:
 def test_profiles_build_and_the_nominal_one_is_the_default():
     assert RigParams.from_dict({"profile": "nominal"}) == RigParams()
     assert RigParams().profile == "nominal" and RigParams().valve.model == "lag"
+    assert not Rig(RigParams())._ext  # the nominal rig runs the original right-hand side
+    assert Rig(RigParams.from_dict({"profile": "dmsp10"}))._ext
     for name in PROFILES:
         p = RigParams.from_dict({"profile": name})
         assert p.profile == name
