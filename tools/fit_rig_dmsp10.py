@@ -151,7 +151,7 @@ def params_of(prof: dict[str, Any]) -> RigParams:
 
 
 # ------------------------------------------------------------------- stage 1
-def fit_static(holds: list[dict[str, float]], prof: dict[str, Any]) -> tuple[dict[str, Any], dict[str, float]]:
+def fit_static(holds: list[dict[str, Any]], prof: dict[str, Any]) -> tuple[dict[str, Any], dict[str, float]]:
     """Valve map and K0, K1, W, A by least squares on the fit holds' terminal values."""
     u = np.array([h["u_cmd_v"] for h in holds])
     pg = np.array([h["p_terminal_bar"] for h in holds]) * 100.0 + P_OFFSET_KPA
@@ -227,7 +227,7 @@ def full_table(params: RigParams) -> dict[str, float]:
 
 
 # ------------------------------------------------------------------- stage 5
-def simulate_holds(params: RigParams, holds: list[dict[str, float]], info: dict[str, float]) -> dict[str, np.ndarray]:
+def simulate_holds(params: RigParams, holds: list[dict[str, Any]], info: dict[str, float]) -> dict[str, np.ndarray]:
     """The recorded command sequence (4 s holds from vented) through the rig;
     terminal s (from the vented length) and p (as the record reads it) per hold."""
     q = quiet(params)
@@ -256,7 +256,7 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.time()
     cache = cache_dir(args.cache)
     paths = {rel: fetch(cache, rel, args.offline) for rel in FILES}
-    holds_all = [{k: (v if k == "branch" else float(v)) for k, v in row.items()
+    holds_all: list[dict[str, Any]] = [{k: (v if k == "branch" else float(v)) for k, v in row.items()
                   if k in ("hold_id", "branch", "u_cmd_v", "s_terminal_mm", "p_terminal_bar")}
                  for row in read_csv(paths[FILES[0]]) if row["branch"] in ("up", "down")]
     holds_all.sort(key=lambda h: h["hold_id"])
