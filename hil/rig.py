@@ -41,12 +41,14 @@ from typing import Any, Mapping
 import numpy as np
 
 from .rig_params import (
+    CreepParams,
     DriftParams,
     LoadParams,
     MuscleParams,
     RegulatorParams,
     RigParams,
     SensorParams,
+    ValveParams,
 )
 
 __all__ = [
@@ -57,6 +59,8 @@ __all__ = [
     "RegulatorParams",
     "SensorParams",
     "DriftParams",
+    "ValveParams",
+    "CreepParams",
 ]
 
 _NS = 1_000_000_000
@@ -106,6 +110,23 @@ class Rig:
         xs = self.static_xs_mm(self._p_set)
         # state: xs [mm], v [mm/s], P [kPa], y (sensor) [mm], z_i (hysteresis) [mm]
         self._s = [xs, 0.0, self._p_set, xs] + [0.0] * self._n_hyst
+        # The extended model (docs/rig.md, "Against a real muscle"): the flow-limited
+        # valve and/or creep. Off in the nominal profile, whose code path and
+        # arithmetic stay exactly those of the three-element rig above.
+        v, c = p.valve, p.creep
+        self._ext = v.model == "flow" or c.frac_contract > 0.0 or c.frac_relax > 0.0
+        self._f = self._rhs_ext if self._ext else self._rhs
+        if self._ext:
+            self._flow = v.model == "flow"
+            self._dead_rise_ns = _ns(v.dead_time_rise_s if self._flow else p.regulator.dead_time_s)
+            self._dead_fall_ns = _ns(v.dead_time_fall_s if self._flow else p.regulator.dead_time_s)
+            self._q_rise: deque[tuple[int, int, float]] = deque()
+            self._q_fall: deque[tuple[int, int, float]] = deque()
+            self._seq_sent = 0
+            self._seq_applied = 0
+            self._last_sent = self._p_set
+            # extra state: the valve's slow pilot set point q [kPa], the creep element Fc [N]
+            self._s += [self._p_set, self._f_pos(self._p_set)]
         self._cache()
         self._update_substep()
 
@@ -125,7 +146,9 @@ class Rig:
         p_cmd = min(max(p_cmd, r.p_min_kpa), r.p_max_kpa)
         self._p_cmd = p_cmd
         p_set = self._regulator_map(p_cmd)
-        if self._dead_ns == 0:
+        if self._ext:
+            self._enqueue_ext(p_set)
+        elif self._dead_ns == 0:
             self._p_set = p_set
         else:
             self._queue.append((self._t_ns + self._dead_ns, p_set))
@@ -196,6 +219,9 @@ class Rig:
         """Advance the rig by dt_s seconds (RK4 sub-steps, split at events)."""
         if dt_s < 0:
             raise ValueError("dt must be >= 0")
+        if self._ext:
+            self._step_ext(dt_s)
+            return
         end = self._t_ns + _ns(dt_s)
         h_ns = self._h_ns
         while self._t_ns < end:
@@ -237,10 +263,12 @@ class Rig:
         self._c_tau_y = p.sensor.tau_s
         self._c_w_static = self._mass * p.load.g_m_s2 * self._sin_incl + self._bias
         self._c_acc = 1000.0 / self._mass
+        if self._ext:
+            self._cache_ext()
 
     def _rk4(self, t: float, h: float) -> None:
         s = self._s
-        f = self._rhs
+        f = self._f
         hh = 0.5 * h
         k1 = f(t, s)
         k2 = f(t + hh, [a + hh * b for a, b in zip(s, k1)])
@@ -277,6 +305,129 @@ class Rig:
         out[1] = self._c_acc * (force - k * xs - b * v - fh - w_load)
         out[2] = (self._p_set - pr) / self._c_tau_p
         out[3] = (xs - y) / self._c_tau_y if self._c_tau_y > 0.0 else v
+        return out
+
+
+    # ------------------------------------------------- the extended model
+    def _enqueue_ext(self, p_set: float) -> None:
+        """A new regulator set point, delayed by the dead time of its direction
+        (rising or falling against the previous command). A set point that takes
+        effect replaces every older one still waiting (a later command wins)."""
+        rising = p_set >= self._last_sent
+        self._last_sent = p_set
+        self._seq_sent += 1
+        dead = self._dead_rise_ns if rising else self._dead_fall_ns
+        if dead == 0:
+            self._p_set = p_set
+            self._seq_applied = self._seq_sent
+        else:
+            (self._q_rise if rising else self._q_fall).append((self._t_ns + dead, self._seq_sent, p_set))
+
+    def _apply_due_ext(self) -> None:
+        best_seq, best_p = self._seq_applied, self._p_set
+        for q in (self._q_rise, self._q_fall):
+            while q and q[0][0] <= self._t_ns:
+                _, seq, p_set = q.popleft()
+                if seq > best_seq:
+                    best_seq, best_p = seq, p_set
+        self._seq_applied, self._p_set = best_seq, best_p
+
+    def _step_ext(self, dt_s: float) -> None:
+        end = self._t_ns + _ns(dt_s)
+        h_ns = self._h_ns
+        while self._t_ns < end:
+            t = self._t_ns
+            nxt = min(end, t + h_ns)
+            for q in (self._q_rise, self._q_fall):
+                if q and q[0][0] < nxt:
+                    nxt = max(q[0][0], t)
+            for t_ev, _, _ in self._d_events:
+                if t < t_ev < nxt:
+                    nxt = t_ev
+                    break
+            d_knee = self._drift_knee_ns
+            if d_knee is not None and t < d_knee < nxt:
+                nxt = d_knee
+            if nxt > t:
+                self._rk4(t * 1e-9, (nxt - t) * 1e-9)
+                self._t_ns = nxt
+            self._apply_due_ext()
+
+    def _cache_ext(self) -> None:
+        p = self.params
+        v, c = p.valve, p.creep
+        self._e_creep = (c.frac_contract, c.frac_relax, 1.0 / c.tau_contract_s, 1.0 / c.tau_relax_s, c.blend_n ** 2)
+        self._e_slow = (v.slow_weight_rise, v.slow_weight_fall, 1.0 / v.slow_tau_rise_s, 1.0 / v.slow_tau_fall_s)
+        self._e_valve = (v.p_band_kpa, v.fill_rate_kpa_s, v.exhaust_rate_kpa_s, v.supply_kpa + v.atm_kpa,
+                         v.atm_kpa, v.b_critical, v.volume_gain_per_mm, v.polytropic_n)
+
+    @staticmethod
+    def _iso6358(ratio: float, b: float) -> float:
+        """Relative flow of an orifice at downstream/upstream pressure ratio (1: choked)."""
+        if ratio <= b:
+            return 1.0
+        if ratio >= 1.0:
+            return 0.0
+        r = (ratio - b) / (1.0 - b)
+        return math.sqrt(1.0 - r * r)
+
+    def _rhs_ext(self, t: float, s: list[float]) -> list[float]:
+        """The three-element right-hand side of _rhs with creep and the valve."""
+        nh = self._n_hyst
+        xs, v, pr = s[0], s[1], s[2]
+        q, fc = s[4 + nh], s[5 + nh]
+        rate, dmax, cf, ck, cb = self._c_dr
+        dT = (rate * t if rate * t < dmax else dmax) if rate > 0.0 else 0.0
+        f = self._c_f0 + self._c_f1 * pr
+        f_pos = 0.5 * (f + math.sqrt(f * f + self._c_fw2))
+        # creep: part of the contractile force arrives through a first-order lag
+        fr_c, fr_r, it_c, it_r, bl2 = self._e_creep
+        d = f_pos - fc
+        sw = 0.5 * (1.0 + d / math.sqrt(d * d + bl2))  # 1 contracting, 0 relaxing
+        d_fc = d * (it_r + (it_c - it_r) * sw)
+        force = (f_pos - (fr_r + (fr_c - fr_r) * sw) * d) * (1.0 + cf * dT)
+        u = (pr - self._c_kb) / self._c_kw
+        k_lo = self._c_klo[0] - self._c_klo[1] * pr
+        k_hi = self._c_khi[0] - self._c_khi[1] * pr
+        k = (k_lo + (k_hi - k_lo) * 0.5 * (1.0 + u / math.sqrt(u * u + 1.0))) * (1.0 + ck * dT)
+        b = (self._c_bmid + self._c_bhalf * math.tanh(v / self._c_bv)) * (1.0 + cb * dT)
+        w_load = self._c_w_static
+        if self._d_events:
+            w_load += self._disturbance_at(t)
+        out = [v, 0.0, 0.0, 0.0]
+        fh = 0.0
+        if self._c_h > 0.0:
+            av = abs(v)
+            acc = 0.0
+            for z, dl, wd in zip(s[4:4 + nh], self._c_hd, self._c_hwd):
+                acc += wd * z
+                out.append(v - av * z / dl)
+            fh = self._c_h * (1.0 - math.exp(-force / self._c_hr)) * acc
+        else:
+            out += [0.0] * nh
+        out[1] = self._c_acc * (force - k * xs - b * v - fh - w_load)
+        out[3] = (xs - s[3]) / self._c_tau_y if self._c_tau_y > 0.0 else v
+        # the valve's set point: part of a step at once, the rest through the slow pilot
+        w_r, w_f, iq_r, iq_f = self._e_slow
+        dq = self._p_set - q
+        swq = 0.5 * (1.0 + dq / math.sqrt(dq * dq + 1.0))  # 1 rising, 0 falling (1 kPa blend)
+        target = self._p_set - (w_f + (w_r - w_f) * swq) * dq
+        d_q = dq * (iq_f + (iq_r - iq_f) * swq)
+        if self._flow:
+            band, r_fill, r_exh, p_sup_abs, p_atm, bc, cv, n_poly = self._e_valve
+            e = (target - pr) / band
+            opening = e / math.sqrt(1.0 + e * e)
+            p_abs = pr + p_atm
+            if opening >= 0.0:
+                dp = r_fill * opening * self._iso6358(p_abs / p_sup_abs, bc)
+            else:
+                dp = r_exh * opening * (p_abs / p_sup_abs) * self._iso6358(p_atm / p_abs if p_abs > 0.0 else 1.0, bc)
+            vol = 1.0 + cv * xs
+            vol = vol if vol > 0.2 else 0.2
+            out[2] = (dp - n_poly * p_abs * cv * v) / vol
+        else:
+            out[2] = (target - pr) / self._c_tau_p
+        out += [d_q, d_fc]
         return out
 
     # ------------------------------------------------------- model functions
@@ -355,6 +506,12 @@ class Rig:
         lam += 1.0 / p.regulator.tau_s + (1.0 / p.sensor.tau_s if p.sensor.tau_s > 0 else 0.0)
         if m.hyst_force_n > 0:
             lam += 100.0 / min(m.hyst_delta_mm)  # Dahl elements at 100 mm/s
+        if self._ext:
+            v, c = p.valve, p.creep
+            if self._flow:
+                lam += max(v.fill_rate_kpa_s, v.exhaust_rate_kpa_s) / v.p_band_kpa
+                lam += 1.0 / min(v.slow_tau_rise_s, v.slow_tau_fall_s)
+            lam += 1.0 / min(c.tau_contract_s, c.tau_relax_s)
         h = min(p.substep_s, 2.0 / lam)
         self._h_ns = max(1, int(h * _NS))
 

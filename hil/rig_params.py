@@ -217,12 +217,67 @@ class DriftParams:
 
 
 @dataclass
+class ValveParams:
+    """The valve/regulator beyond the first-order lag (docs/rig.md, "Against a real
+    muscle"). model = "lag" (the default) keeps the regulator's dead time and
+    first-order lag (RegulatorParams) and ignores everything below; "flow" replaces
+    them: a dead time per direction, then a proportional valve whose opening
+    saturates beyond p_band_kpa, filling from the supply and exhausting to the
+    atmosphere through an ISO 6358 orifice (choked below the critical pressure
+    ratio b, subsonic above, so exhausting slows down as the muscle approaches
+    atmospheric pressure), into the muscle's volume V(xs) = V0 (1 +
+    volume_gain_per_mm xs) (a contraction draws the pressure down while the
+    volume grows). The set point the valve regulates to approaches a command in
+    two parts: slow_weight of the step with slow_tau (the pilot stage and the
+    slow final approach seen in measured steps), the rest at once. Pressures are
+    gauge kPa; rates are dP/dt in kPa/s of the muscle at V0, valve fully open,
+    choked flow."""
+
+    model: str = "lag"
+    dead_time_rise_s: float = 0.005
+    dead_time_fall_s: float = 0.005
+    supply_kpa: float = 600.0
+    atm_kpa: float = 101.325
+    fill_rate_kpa_s: float = 7000.0  # fully open, choked, from the supply into V0
+    exhaust_rate_kpa_s: float = 7000.0  # fully open, choked, from supply_kpa to the atmosphere
+    b_critical: float = 0.3  # ISO 6358 critical pressure ratio
+    p_band_kpa: float = 20.0  # proportional band: fully open beyond this error
+    slow_weight_rise: float = 0.0
+    slow_weight_fall: float = 0.0
+    slow_tau_rise_s: float = 0.5
+    slow_tau_fall_s: float = 0.5
+    volume_gain_per_mm: float = 0.0  # (V - V0)/V0 per mm of contraction
+    polytropic_n: float = 1.0  # 1: isothermal (slow changes), 1.4: adiabatic
+
+
+@dataclass
+class CreepParams:
+    """Creep at constant pressure: a slow viscoelastic part of the contractile
+    element. A fraction of F(P) reaches the muscle only through a first-order lag,
+    F_eff = F(P) - frac (F(P) - Fc), Fc' = (F(P) - Fc)/tau, with frac and tau of
+    contraction (F(P) > Fc) or relaxation (F(P) < Fc), blended over blend_n. At
+    rest F_eff = F(P): the static model is unchanged. frac = 0 disables."""
+
+    frac_contract: float = 0.0
+    frac_relax: float = 0.0
+    tau_contract_s: float = 1.0
+    tau_relax_s: float = 0.5
+    blend_n: float = 1.0  # smooth switch between the two directions (numerics only)
+
+
+@dataclass
 class RigParams:
     muscle: MuscleParams = field(default_factory=MuscleParams)
     load: LoadParams = field(default_factory=LoadParams)
     regulator: RegulatorParams = field(default_factory=RegulatorParams)
     sensor: SensorParams = field(default_factory=SensorParams)
     drift: DriftParams = field(default_factory=DriftParams)
+    valve: ValveParams = field(default_factory=ValveParams)
+    creep: CreepParams = field(default_factory=CreepParams)
+    # The rig profile these values started from ("nominal": the defaults above;
+    # others in hil/rig_profiles.py). RigParams.from_dict({"profile": name, ...})
+    # takes the profile's values, then the other keys on top.
+    profile: str = "nominal"
     # The preset pressure p0 (must equal the firmware's act.p0_kpa): the static
     # equilibrium at the command p0 defines x = 0.
     p0_kpa: float = 300.0
@@ -239,7 +294,13 @@ class RigParams:
         """Defaults overridden by `data` (nested like `to_dict()`); unknown keys
         and invalid values raise ValueError so that a typo in a scenario file is
         not ignored."""
-        params = _from_dict(cls, data or {}, "rig")
+        data = dict(data or {})
+        name = data.get("profile", "nominal")
+        if name != "nominal":
+            from .rig_profiles import profile_dict  # here: rig_profiles imports this module
+
+            data = _merge_tables(profile_dict(str(name)), data)
+        params = _from_dict(cls, data, "rig")
         params.validate()
         return params
 
@@ -247,8 +308,10 @@ class RigParams:
         return dataclasses.asdict(self)
 
     def replace(self, **changes: Any) -> "RigParams":
-        """A copy with changes given as 'group.name' or top-level names."""
-        data = self.to_dict()
+        """A copy with changes given as 'group.name' or top-level names. A change of
+        'profile' starts from that profile's values (the other changes on top)."""
+        base = RigParams.from_dict({"profile": changes.pop("profile")}) if "profile" in changes else self
+        data = base.to_dict()
         for key, value in changes.items():
             parts = key.replace("__", ".").split(".")
             node = data
@@ -298,9 +361,29 @@ class RigParams:
             (self.substep_s > 0, "substep_s must be > 0"),
             (math.isfinite(self.p0_kpa), "p0_kpa must be finite"),
         ]
+        v, c = self.valve, self.creep
+        checks += [
+            (v.model in ("lag", "flow"), "valve.model must be 'lag' or 'flow'"),
+            (v.dead_time_rise_s >= 0 and v.dead_time_fall_s >= 0, "valve dead times >= 0"),
+            (v.fill_rate_kpa_s > 0 and v.exhaust_rate_kpa_s > 0 and v.p_band_kpa > 0, "valve rates, band > 0"),
+            (0 <= v.b_critical < 1 and v.supply_kpa > 0 and v.atm_kpa > 0, "valve b in [0, 1), pressures > 0"),
+            (0 <= v.slow_weight_rise < 1 and 0 <= v.slow_weight_fall < 1, "valve slow weights in [0, 1)"),
+            (v.slow_tau_rise_s > 0 and v.slow_tau_fall_s > 0 and v.polytropic_n >= 1, "valve slow taus > 0, n >= 1"),
+            (0 <= c.frac_contract < 1 and 0 <= c.frac_relax < 1, "creep fractions in [0, 1)"),
+            (c.tau_contract_s > 0 and c.tau_relax_s > 0 and c.blend_n > 0, "creep taus, blend > 0"),
+        ]
         for ok, msg in checks:
             if not ok:
                 raise ValueError(msg)
+
+
+def _merge_tables(base: Mapping[str, Any], over: Mapping[str, Any]) -> dict[str, Any]:
+    """over on top of base, nested tables merged key by key."""
+    out = dict(base)
+    for k, v in over.items():
+        b = out.get(k)
+        out[k] = _merge_tables(b, v) if isinstance(v, Mapping) and isinstance(b, Mapping) else v
+    return out
 
 
 def _from_dict(cls: type, data: Mapping[str, Any], where: str) -> Any:
