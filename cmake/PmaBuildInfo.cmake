@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Firmware identity, stamped at build time: `pma_build_info` (a generated .c file in the build
 # tree, behind firmware/app/build_info.h) holds the version of the VERSION file (the one source
 # of the firmware's version), the git commit and whether the tree had uncommitted changes, and
@@ -30,7 +31,8 @@ if(CMAKE_SCRIPT_MODE_FILE)
   list(GET _v 0 _major)
   list(GET _v 1 _minor)
   list(GET _v 2 _patch)
-  set(_text "/* Generated at build time by cmake/PmaBuildInfo.cmake: do not edit. */
+  set(_text "/* SPDX-License-Identifier: Apache-2.0 */
+/* Generated at build time by cmake/PmaBuildInfo.cmake: do not edit. */
 #include \"build_info.h\"
 
 #include \"generated/pma_proto.h\"

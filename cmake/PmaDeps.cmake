@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Third-party sources: where they are, and a clear error when one is missing.
 #
 # tools/fetch-deps.sh fetches them (pinned upstream commits, verified; PMA_DEPS_MIRROR for

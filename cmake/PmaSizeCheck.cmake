@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Size report and budget of a firmware image (cmake -P, after the link).
 #   -DSIZE=arm-none-eabi-size -DELF=<image.elf> -DFLASH_MAX=<bytes> -DRAM_MAX=<bytes>
 # flash = text + data (the .data initialisers live in flash); RAM = data + bss

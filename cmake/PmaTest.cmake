@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Test and benchmark helpers (included by the top-level CMakeLists.txt).
 #
 #   pma_add_test(<name> SOURCES <files...> [LIBRARIES <libs...>] [INCLUDES <dirs...>])

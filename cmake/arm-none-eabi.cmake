@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Toolchain file: bare-metal ARM Cortex-M with Debian's gcc-arm-none-eabi 12 + newlib.
 #
 # Select the core with the cache variable PMA_TARGET (the presets set it):

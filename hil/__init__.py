@@ -1,1 +1,2 @@
+# SPDX-License-Identifier: Apache-2.0
 """Simulated PMA rig for the HIL harness (see docs/rig.md)."""

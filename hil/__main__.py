@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """python -m hil: run HIL scenarios against pma-fw-host (or a board) over CAN.
 
     python -m hil list

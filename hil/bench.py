@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Lockstep throughput of the HIL loop, next to a raw python-can round trip with
 the same firmware node in the same run, and where the time in between goes.
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """One pma-fw-host process: where the binary is, starting it on a SocketCAN
 interface with its output in a log file, and stopping it with a check of its
 exit status and of sanitizer reports. Used by the integration tests

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Figures of merit of one controller's run, from the recorded signals.
 
 All times are control time since START [s] (tick n of the run is t = n T). The

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Offline runs: the real firmware against the simulated rig, without CAN.
 
 The firmware application, its control library and the fake HAL port are built

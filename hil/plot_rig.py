@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Figures and tables of the simulated rig for docs/rig.md.
 
     .venv/bin/python hil/plot_rig.py [--out docs/img] [--no-plots]

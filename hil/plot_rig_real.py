@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Figures and the table of docs/rig.md, "Against a real muscle".
 
     .venv/bin/python hil/plot_rig_real.py [--out docs/img] [--no-plots]

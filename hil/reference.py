@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The reference x_r(t) of a scenario, evaluated by the harness (cm, t in s since
 START) from the formulas in docs/controllers.md and the paper, independently of
 the firmware's generator. The runner checks it against the x_r the firmware

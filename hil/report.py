@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Reports of HIL runs: the RMSTE per window next to the paper's Tables 1 and 2,
 the other figures of merit, and PNG figures in the style of the paper's Figs. 4-8.
 """

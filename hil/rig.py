@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The simulated pneumatic-muscle rig: muscle, load, pressure regulator, laser sensor.
 
 Independent of the firmware's code: it only shares the wiring conventions (the

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The figures of issue 19's table, measured on a simulated rig the way they were
 measured on the real DMSP-10-250 (docs/rig.md, "Against a real muscle").
 

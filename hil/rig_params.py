@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Parameters of the simulated PMA rig, with the published sources they come from.
 
 Every number of the rig lives in one of the dataclasses below; `RigParams.from_dict`

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Rig profiles: named sets of RigParams values (docs/rig.md, "Against a real muscle").
 
     RigParams.from_dict({"profile": "dmsp10"})           # in a scenario: [rig] profile = "dmsp10"

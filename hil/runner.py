@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The HIL runner: a scenario's controllers, each on its own firmware node and its
 own simulated rig, driven tick by tick over CAN through the plant bridge.
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """HIL scenarios: data files (TOML) that say what the rig is, how the firmware is
 configured over CAN, which controllers run side by side, what happens during the
 run, and what the run must end in.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """A run's results: the per-tick recording, and summary.json built from it.
 
 Shared by the two ways of running a scenario, so that they report the same

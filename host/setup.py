@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The build's one job beyond pyproject.toml: put the protocol's single sources of truth into
 the package, and its version: firmware/protocol/pma_proto.dbc, firmware/app/params.toml and the
 repository's VERSION (the firmware's version, which pmactl shares) are copied into

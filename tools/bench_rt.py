@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Real-time benchmark of pma-fw-host over vcan (printed figures, no assertions).
 
 Run where vcan0 exists, e.g.:  hil/with-vcan .venv/bin/python tools/bench_rt.py

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Configure and build every preset (host, host-ubsan: pma-fw-host only, host-offline: libpma_offline.so
 # only, cortex-m4f, cortex-m3, cortex-m0, stm32g474: the board image, which fails above its flash/RAM
 # budget).

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Worst-case CAN bus load of PMA nodes with the default parameters.
 
 Reads the data length of every frame from firmware/protocol/pma_proto.dbc

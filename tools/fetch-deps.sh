@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Fetch the project's third-party C sources into .deps/, each pinned to an upstream commit and
 # verified by that commit id. This is the one mechanism for third-party sources; CMake only
 # checks that they are there (cmake/PmaDeps.cmake).

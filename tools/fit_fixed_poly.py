@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Reproduce the polynomial coefficients of firmware/control/src/fixed.c.
 
 tan(pi r / 2) = r g(r^2) / (1 - r^2): g is smooth on [0, 1] (pi/2 at 0, 4/pi

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Fit the rig's "dmsp10" profile to the public measurements of a Festo DMSP-10-250.
 
     .venv/bin/python tools/fit_rig_dmsp10.py [--cache DIR] [--offline] [--write] [--quick]

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Fuzzes the application's CAN frame handler for a bounded time (docs/testing.md, "Fuzzing").
 #
 #   bash tools/fuzz.sh [SECONDS]        default 60

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Generate the figures of docs/controllers.md from the numpy reference.
 
     python tools/plot_docs.py --out docs/img

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Golden-vector and cost report of the control library.
 
 Runs, for every preset that has been built (tools/build-all.sh):

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The main job, from a fresh Debian 12 / Ubuntu machine: set-up, build of the host
 # firmware (pma-fw-host), then the paper's Case 3 in the HIL harness: the paper's
 # controller and MFAC, each on its own pma-fw-host node in lockstep over vcan

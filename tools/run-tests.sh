@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # All tests, from a fresh Debian 12 / Ubuntu machine: set-up, then every
 # preset's CTest suite (Unity; host with ASan/UBSan; Cortex-M4F, M3, M0 under QEMU),
 # the generated code's freshness, the Python tests (numpy golden reference,
@@ -46,7 +47,8 @@ for p in host cortex-m4f cortex-m3 cortex-m0; do
   stage "ctest $p" ctest --preset "$p" -j2
 done
 stage "pytest (no CAN)" .venv/bin/python -m pytest -q tests/golden tests/protocol \
-  hil/tests/test_rig.py hil/tests/test_scenarios.py hil/tests/test_offline.py
+  hil/tests/test_rig.py hil/tests/test_rig_profiles.py hil/tests/test_scenarios.py \
+  hil/tests/test_offline.py hil/tests/test_metrics_names.py hil/tests/test_param_rules.py
 stage "hil/with-vcan" bash hil/tests/test_with_vcan.sh
 stage "pmactl unit tests (python-can virtual bus, no CAN)" \
   .venv/bin/python -m pytest -q host/tests --ignore=host/tests/integration

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # One-time (idempotent) set-up of a Debian 12 / Ubuntu machine for building and
 # testing the PMA firmware: Debian packages, the pinned third-party C sources
 # (Unity, ST cmsis_device_g4, Arm CMSIS_6: tools/fetch-deps.sh, into .deps/;

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Actuator limits and the safe state: see actuator.h. */
 #include "actuator.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* From the controller output u to the pressure command: pure functions.
  *
  *   active: p = clamp(p0 + polarity * kpa_per_u * u, p_min, p_max), then

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The application's loop, state machine and output: see app.h. Frames and
  * their encoding are in app_frames.c. */
 #include "app.h"

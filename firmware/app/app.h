@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The firmware application: the fixed-rate control loop, the state machine,
  * the safety supervisor's enforcement, parameters and storage, and the CAN
  * protocol (firmware/protocol/pma_proto.dbc, docs/protocol.md). Portable: it

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The CAN side of the application: decoding received frames with the codec
  * generated from firmware/protocol/pma_proto.dbc, the replies, heartbeat,
  * telemetry and plant-bridge frames. Rules for bad frames (docs/protocol.md):

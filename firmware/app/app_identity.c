@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The node's identity on the wire: DEVICE_INFO, five pages sent at once in reply to
  * DEVICE_INFO_REQ (this node) and DEVICE_INFO_REQ_ALL (every node; how a scan finds two devices
  * on one node id). What it reports comes from one place each: the protocol version from the

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Shared between app.c and app_frames.c; not part of the application's API. */
 #ifndef PMA_APP_INTERNAL_H
 #define PMA_APP_INTERNAL_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The firmware's identity, stamped at build time (cmake/PmaBuildInfo.cmake writes the one
  * definition, pma_build_info.c, into the build tree): what DEVICE_INFO reports. */
 #ifndef PMA_BUILD_INFO_H

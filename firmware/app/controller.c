@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The controller slot: see controller.h. */
 #include "controller.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The application's controller slot: the reference, the velocity estimator and
  * the selected controller (ctrl.mode), built from the parameters at START and
  * stepped once per tick while RUNNING. Float variants (the board is a

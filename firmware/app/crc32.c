@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* CRC-32 (see crc32.h), four bits at a time. */
 #include "crc32.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* CRC-32 as in IEEE 802.3, zlib and PNG ("CRC-32/ISO-HDLC"): polynomial
  * 0x04C11DB7 processed bit-reflected (0xEDB88320), initial value 0xFFFFFFFF,
  * final XOR 0xFFFFFFFF. Check value: CRC of the ASCII "123456789" is

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Parameter access by id: see params.h. */
 #include "params.h"
 

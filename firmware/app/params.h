@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Parameters: the table (generated from params.toml), typed access by id with
  * range, type, NaN and state checks, defaults, and the storage format.
  *

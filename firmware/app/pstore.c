@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Parameter storage in two A/B slots (record format and guarantees in pstore.h). */
 #include "pstore.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Parameter storage: one opaque, versioned blob (the application's parameter
  * set, up to PMA_PSTORE_MAX_BLOB_BYTES) kept in NVM through the HAL
  * (pma_hal_nvm_*) so that a power cut at any moment of a save loses nothing.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The safety supervisor: see supervisor.h. */
 #include "supervisor.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The safety supervisor: a pure function from what the loop observed in one
  * tick to a fault code, independent of the controllers (it reads their output
  * and flags, never their state). The application latches the first fault,

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Pressure command scaling: kPa -> counts, saturating (see pma/hal_scaling.h). */
 #include "pma/hal_scaling.h"
 #include "pma/status.h"

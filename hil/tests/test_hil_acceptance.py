@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Acceptance of the firmware against the paper's experiments, over vcan: every
 scenario runs pma-fw-host in lockstep through the HIL runner, and the tests
 assert on the simulated results (never on timing).

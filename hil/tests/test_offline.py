@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The offline runs without CAN: the ctypes layer over libpma_offline.so (the real firmware on
 the fake port) and `python -m hil offline`'s refusals. Needs the library
 (cmake --preset host-offline && cmake --build --preset host-offline); the comparison with the

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The offline runs are the real firmware: Case 3 (quick, 30 s, all four controllers) offline
 (libpma_offline.so, hil/offline.py) and in lockstep over vcan (pma-fw-host, hil/runner.py) give
 the same figures to the last digit, and the same signals tick for tick.

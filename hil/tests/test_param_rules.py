@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Issue 16, point 9: the harness meets the rules between parameters (docs/parameters.md)
 itself. A rig with an 11-bit ADC puts adc.raw_min_counts (3.8 mA) below the default
 wire-break level 737: the harness must set adc.wire_break_below_counts first (rule 3), and

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Tests of the simulated rig's physics (no CAN needed).
 
     .venv/bin/python -m pytest hil/tests/test_rig.py -q

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The realistic rig profiles against the measured muscle (issue 19), no CAN needed.
 
     .venv/bin/python -m pytest hil/tests/test_rig_profiles.py -q

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The HIL harness without CAN: scenario files, their validation, the metrics and
 the command line's refusals (the runs themselves: test_hil_acceptance.py, over vcan)."""
 from __future__ import annotations

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Tests for hil/with-vcan. Exits non-zero if any test fails; the last line
 # printed is "N passed, N failed". Needs can-utils and python3 (and, on a
 # kernel without vcan, user-mode-linux, kmod and iproute2).

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Unit tests of pmactl on python-can's virtual bus, against fake nodes (fakenode.py):
 no CAN hardware, no firmware, no vcan.
 

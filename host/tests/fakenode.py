@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """A fake PMA node for the unit tests: a thread on python-can's virtual bus that
 answers the protocol (docs/protocol.md) for a few parameters, closely enough to test
 every pmactl command, its output and its errors without CAN hardware or firmware.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Runs `pmactl scope` in a real window against a fake node, for test_scope.py: the fake
 node (fakenode.py, x_r a 2 s sine) RUNNING on a virtual bus in this process, the scope
 through pmactl's command line, and two screenshots of the X display (PIL.ImageGrab)

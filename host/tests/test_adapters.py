@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Adapters without surprises: an interface that cannot be opened gives python-can's reason
 and the step that fixes it (pmactl.adapters), exit 3, never a traceback."""
 from __future__ import annotations

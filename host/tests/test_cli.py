@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Every pmactl command against fake nodes on python-can's virtual bus: its output, its
 errors and its exit status (host/README.md lists them)."""
 from __future__ import annotations

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The client library (what the HIL harness uses): bus configuration, the protocol
 tables against the firmware's sources, PmaNode, the telemetry grouper and recorder,
 parameter files and recordings."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Node identity (DEVICE_INFO): pmactl info, status and scan against fake nodes, the two
 devices on one node id, a node of another protocol version, a malformed DEVICE_INFO, and the
 parameter-table hash tied to the firmware's generated table."""

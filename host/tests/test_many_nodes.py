@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Commands on several nodes (--node 1,2,5, --all) with a report per node, bad node lists, and
 moving a node to another id (pmactl node-id): its refusals, which change nothing."""
 from __future__ import annotations

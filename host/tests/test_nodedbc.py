@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The DBC for every node (pmactl.nodedbc, `pmactl dbc`): generic tools decode logs of
 nodes other than 0 with it. The checks go through cantools' own command line
 (`python -m cantools decode`), as a user's would, and python-can's log converter."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The package's licence metadata: what a lab checks before it adopts the tool."""
 from __future__ import annotations
 

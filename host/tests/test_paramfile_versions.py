@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Parameter files across firmware versions: a file of another parameter table is mapped by
 name (dropped, renamed, clamped, what the node lacks), a file of this table or of none recorded
 is checked strictly, and sys.node_id is never copied unless asked."""

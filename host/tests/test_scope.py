@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """pmactl scope: headless (Agg, PNG per frame) against fake nodes on the virtual bus, and
 in a real window under Xvfb with screenshots. Frames are counted, never seconds."""
 from __future__ import annotations

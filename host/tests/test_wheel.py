@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """A wheel that stands alone: built with pip from host/ (and from a copy of the repository's
 files with no symbolic link anywhere), installed into a fresh virtual environment outside
 the repository, it runs `pmactl --version` and decodes a frame with the DBC it carries.

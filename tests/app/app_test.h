@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Shared harness of the application tests (Unity, fake HAL).
  *
  * The application under test is one static pma_app_t (`app`, 744 bytes at the

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Plant in the loop (in the manner of moteus' simulation_fixture.h): the
  * application, driven through the fake HAL exactly as on the rig, closes the
  * loop around a small model of a pneumatic muscle in this test.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The state machine through COMMAND frames, exactly as a host drives it:
  * every command (ARM, DISARM, START, STOP, ESTOP, CLEAR_FAULTS,
  * SELECT_CONTROLLER, SELECT_REFERENCE, undefined ones) in every state (IDLE,

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The controller slot (firmware/app/controller.c) on its own: what the PPC
  * options ppc.ref_vel and ppc.obs_pos feed the paper's law, and that both off
  * feed it the raw sample and the velocity estimate (the paper's law).

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Every fault drives the output to the configured safe state within the tick
  * that detects it, and latches its code (HEARTBEAT FaultCode) until
  * CLEAR_FAULTS:

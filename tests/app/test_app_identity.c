@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The node's identity on the wire (app_identity.c): DEVICE_INFO pages 0..4 in reply to
  * DEVICE_INFO_REQ and the broadcast DEVICE_INFO_REQ_ALL, their contents from the build, the DBC,
  * the parameter table and the platform's unique id; a request of the wrong length, or for

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Parameters (params.h, generated table): defaults, typed access by id, every
  * rejection (unknown id, wrong type, NaN / infinity, below min, above max,
  * access class against the phase) leaving the set unchanged, enumeration by

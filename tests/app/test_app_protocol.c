@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The CAN protocol as a host sees it (frames built and read with the codec
  * generated from pma_proto.dbc):
  *   - PARAM_REQ: every op (GET, SET, SAVE, RESTORE_DEFAULTS, GET_MIN, GET_MAX,

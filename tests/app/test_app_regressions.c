@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Regression tests: bugs found in firmware/app by the test review, one test
  * each, with what was wrong (the line numbers refer to the code before the
  * fix) and how it was fixed. They failed before the fixes. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Parameter storage through the protocol: SET then SAVE then a restart
  * (watchdog/software reboot or power-on, on the same fake NVM) loads the saved
  * set; a power cut at every single NVM operation of a SAVE (applied 0 %, 50 %

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The safety supervisor (supervisor.h) and the actuator limits and safe
  * states (actuator.h): pure functions, no HAL.
  *

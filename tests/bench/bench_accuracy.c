@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Accuracy of the float and fixed-point controllers against the independent
  * double-precision reference: the golden vectors (tests/golden/vectors) run
  * through each variant; max and RMS |u - u_ref| in % of the input range

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Cost of one control step of every controller, float and fixed point, on
  * the build's core. Under `cmake --build --preset <arm> --target bench` QEMU
  * runs with -icount shift=0, so figures are exact instruction counts; on the

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The STM32G474 port's drivers on the host, against a register file in RAM
  * (Unity; ASan + UBSan on the host preset).
  *

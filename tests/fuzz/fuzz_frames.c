@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* libFuzzer target: the application's CAN frame handler (pma_app_handle_frame)
  * and the loop around it, on one application instance per input, against the
  * fake HAL, with invariants checked after every operation.

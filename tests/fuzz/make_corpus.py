@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Seed corpus and dictionary of the CAN frame fuzzer (tests/fuzz/fuzz_frames.c).
 
 The frames are encoded with cantools from the protocol's one source,

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Generate the golden vectors tests/golden/vectors/*.h from the double-precision reference.
 
     python3 tests/golden/gen_vectors.py              # (re)write tests/golden/vectors/*.h

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Shared comparison, reporting and test-registration helpers of the golden-vector tests
  * (tests/golden/test_golden_*.c). Header-only (static functions), included once per test.
  *

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Independent double-precision reference of the PMA control algorithms.
 
 This module restates, in plain numpy/double arithmetic, the equations that the

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Golden-vector test of CFDL-MFAC (pma_mfac_*): every set of vectors/mfac_vectors.h through
  * the float and the Q16.16 variant; phi(k), u(k) and the flags of every row.
  *

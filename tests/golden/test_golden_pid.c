@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Golden-vector test of the PID baseline (pma_pid_*): every set of vectors/pid_vectors.h
  * through the float and the Q16.16 variant; u and the flags of every row.
  *

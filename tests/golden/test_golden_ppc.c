@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Golden-vector test of the paper's controller (pma_ppc_*): every set of
  * vectors/ppc_vectors.h through the float and the Q16.16 variant, every output field.
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Golden-vector test of the reference generators (pma_ref_*): every set of
  * vectors/ref_vectors.h through the float and the Q16.16 variant; x_r and x_r' of every row
  * (STREAM rows first give the row's target, when not NAN, with pma_ref_stream_*).

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Golden-vector test of the velocity estimators (pma_velest_*): every set of
  * vectors/velest_vectors.h through the float and the Q16.16 variant; v of every row.
  *

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Property tests of the double-precision reference (pma_reference.py) and of the generator.
 
 Run: python3 -m pytest tests/golden/test_reference.py

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Shared header of the HAL, fake-port and storage tests: the project's test
  * support (Unity and assert_status, tests/support/pma_test.h) and the
  * declaration of pma_status_name() that assert_status prints with. */

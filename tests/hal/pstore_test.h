@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Shared set-up of the parameter storage tests: a small fake NVM (64-byte
  * blocks, 8-byte program size, like a scaled-down STM32G4 page), slots of 9
  * blocks from block 1 (room for a 512-byte blob), one blob buffer, blob

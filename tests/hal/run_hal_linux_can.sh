@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Runs the Linux port's CAN test (test_hal_linux_can) where SocketCAN exists:
 #   hil/with-vcan tests/hal/run_hal_linux_can.sh build/host/tests/hal/test_hal_linux_can
 #

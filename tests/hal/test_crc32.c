@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* CRC-32 (firmware/app/crc32.h): the standard check value, chaining, and
  * agreement with a plain bit-at-a-time implementation written here. */
 #include "hal_test.h"

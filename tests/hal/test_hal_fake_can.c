@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Fake port, CAN: queues, filters, dropped and duplicated frames, the fault
  * confinement state machine (error-active, error-passive, bus-off) and
  * bus-off recovery. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Fake port: sensor faults, DAC log, clock and tick, watchdog, reset causes,
  * initialisation rules. */
 #include "hal_test.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Fake port, NVM: geometry, flash semantics (erase to 0xFF, program only
  * erased and aligned areas), the power-cut injector with partial application,
  * power-on keeping the contents, a worn byte. */

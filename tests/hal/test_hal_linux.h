@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Shared helpers of the Linux port's tests (test_hal_linux_*.c). */
 #ifndef PMA_TEST_HAL_LINUX_H
 #define PMA_TEST_HAL_LINUX_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Linux port, CAN on SocketCAN: needs a vcan interface, so CTest runs it
  * through hil/with-vcan and tests/hal/run_hal_linux_can.sh (which names the
  * interfaces in PMA_TEST_CAN_*). A second raw socket in the test, the

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Helper program of test_hal_linux_reset.c: does the things that end or
  * replace a process (watchdog reset, power cut), so that the test can
  * run it and check its exit status and output. Not a test by itself.

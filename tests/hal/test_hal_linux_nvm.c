@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Linux port, NVM in a file: created erased at the configured size, the raw
  * image format, contents kept across re-initialisation, flash semantics
  * (program only over erased bytes, program-size alignment, block ranges),

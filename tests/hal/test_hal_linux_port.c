@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Linux port without a CAN interface (runs on any host, under ASan): the
  * init rules and errors with their messages, the devices this port does not
  * have, and the pure parts of CAN: the RX ring and the decoding of SocketCAN

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Linux port, what ends or replaces a process, checked through a helper
  * program (test_hal_linux_helper.c) run with fork/exec: the reset cause from
  * the environment (and its removal), the watchdog's re-execution with the

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Linux port, time and the real-time tick: a monotonic clock, and ticks on
  * absolute deadlines with the late_ticks semantics of pma/hal.h. Only lower
  * bounds of elapsed time are asserted, the ones guaranteed by construction

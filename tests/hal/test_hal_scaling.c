@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* ADC and DAC scaling (pma/hal_scaling.h): conversion, range and wire-break
  * checks, saturation, validation. */
 #include "hal_test.h"

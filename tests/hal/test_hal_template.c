@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The blank template port: every function of pma/hal.h exists (this links)
  * and answers as documented (PMA_ERR_NOT_IMPLEMENTED, or a neutral value). */
 #include "hal_test.h"

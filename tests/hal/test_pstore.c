@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Parameter storage (firmware/app/pstore.h) on the fake NVM: the A/B
  * rotation, the record layout, corruption of every part of a record,
  * sequence wrap-around, oversized blobs, read-back verification, device

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The power-loss guarantee of the parameter storage: power is cut at every
  * single program and erase operation of a save, with the cut operation
  * applied to 0 %, 4 %, 25 %, 50 %, 97 % and 100 % of its bytes (a program

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Integration tests: pma-fw-host on vcan0, driven with python-can and the
 project's protocol client (pmactl.PmaNode). Run them through hil/with-vcan,
 which provides vcan0 (natively or in a User-Mode Linux guest):

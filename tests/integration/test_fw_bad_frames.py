@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Malformed and foreign frames (docs/protocol.md "Bad input"): answered with
 an error (COMMAND, PARAM_REQ) or dropped, never obeyed; after each one the
 state and every parameter are unchanged and the node still answers."""

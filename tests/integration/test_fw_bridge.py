@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The plant bridge: PLANT_ACTUATOR echoes the sample's Seq; Sample NEW / GAP
 / REPEATED / NONE in lockstep and in real time; a duplicate (the same Seq
 again) is no new sample; the heartbeat flags of the bridge."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """pma-fw-host's command line: --help (0), bad options (2), start-up
 failures such as a missing interface or an unusable storage file (1, with a
 clear message), and the signals that stop it (0)."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Every COMMAND in every state it can meet (ACK Result and State, then the
 heartbeat), the ESTOP / ESTOP_ALL frames (any DLC) from IDLE, ARMED and
 RUNNING, and two nodes on one bus (commands to one leave the other alone,

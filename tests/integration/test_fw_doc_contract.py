@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Issue 16: what a client written from the docs alone relies on, checked on the
 wire (raw frames, so that no client library hides a difference).
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Every fault reachable from outside the node: FAULT with the right FaultCode,
 and the safe output (PLANT_ACTUATOR DacCounts = the safe-state counts,
 OutputActive 0) in the very tick that detects it; the safe modes VENT, HOLD

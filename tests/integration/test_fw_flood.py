@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Issue 16, point 7: a flood of valid requests (PARAM_REQ GETs to the node's own id at
 the full rate of vcan, `cangen -g 0`) must leave the control tick and the tracking
 unchanged (docs/protocol.md "Bad input": the node reads at most 128 frames per loop

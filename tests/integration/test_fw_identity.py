@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """pma-fw-host's identity on the wire (DEVICE_INFO): what it reports (VERSION, the git commit,
 the build target, the protocol version, the parameter table, the unique id from --uid or from
 its storage file), the broadcast request, a malformed request, and two devices on one node id

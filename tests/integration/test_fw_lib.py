@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Shared helpers of the test_fw_*.py integration tests (no tests here).
 
 Everything talks to pma-fw-host over vcan0 with python-can and pmactl.PmaNode;

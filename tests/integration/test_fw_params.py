@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The parameter table over CAN: every parameter of docs/parameters.md has its
 params.toml default after a fresh start, reports the table's min, max and
 default, NEXT_ID enumerates exactly the table, min and max are accepted, and

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Parameter storage through pma-fw-host --storage: SAVE survives a restart
 (and clears the PARAMS_* flags), RESTORE_DEFAULTS and LOAD, and a power cut
 at every NVM operation of a SAVE (--test-nvm-cut-after N, a few

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The streamed set-point (ref.kind STREAM, SETPOINT frames) and telemetry
 (TELEM_A..E every telem.decimation ticks while RUNNING, only the frames of
 telem.mask), in lockstep mode."""

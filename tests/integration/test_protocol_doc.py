@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """docs/protocol.md is true: its runnable examples, run with can-utils
 (cansend, candump) as the client against pma-fw-host, produce the frames the
 document shows, and every cell of its state-transition table is what the

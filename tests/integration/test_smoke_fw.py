@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """First contact: pma-fw-host starts on vcan0, answers, runs the loop in lockstep."""
 from __future__ import annotations
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Reads docs/protocol.md for the tests: its runnable examples, its tables.
 
 Used by tests/protocol (no CAN) and tests/integration/test_protocol_doc.py

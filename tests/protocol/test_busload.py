@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """tools/busload.py: the worst-case frame length, the load figures, and the
 table in docs/protocol.md being its current output. No CAN needed."""
 from __future__ import annotations

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The DBC (firmware/protocol/pma_proto.dbc) agrees with the C sources it is
 not generated from: value tables against the C enums, the id layout, and the
 generated codec is current. No CAN needed."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """docs/protocol.md agrees with the DBC and the firmware headers: message and
 signal tables, value tables, heartbeat flags, the transition table's form, and
 examples that parse and cover every message. No CAN needed (the examples are

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Host implementation of pma_board.h: wall-clock time from CLOCK_MONOTONIC. */
 #define _POSIX_C_SOURCE 199309L
 

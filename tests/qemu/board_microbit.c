@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * pma_board.h on QEMU's microbit (nRF51822, Cortex-M0). The nRF51 has no SysTick.
  *

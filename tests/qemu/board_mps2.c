@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * pma_board.h on QEMU's mps2-an385 (Cortex-M3) and mps2-an386 (Cortex-M4F).
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * Bare-metal startup for the emulated boards (QEMU mps2-an385/an386, microbit), used only by
  * test and benchmark executables (linked through the `pma_board` library, cmake/PmaTest.cmake).

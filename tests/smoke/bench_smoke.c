@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * Smoke benchmark: times a known loop and prints the cost per iteration.
  * Under `cmake --build --preset <arm> --target bench` QEMU runs with -icount shift=0, so the

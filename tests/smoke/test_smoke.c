@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * Smoke test of the test infrastructure itself: Unity runs, asserts are evaluated, floating
  * point (FPU or soft-float), 64-bit division (libgcc's __aeabi_*ldivmod on ARM) and printf of

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The test support's functions (pma_test.h). */
 #include "pma_test.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * The project's test support, shared by every C test (unit, golden, app, hal, board, smoke):
  * Unity (ThrowTheSwitch) plus the assertion helpers that print the project's names and values

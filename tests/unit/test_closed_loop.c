@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Plant-in-the-loop test: the paper's controller with a velocity estimator
  * closes the loop around a small model of the paper's eq. 7,
  *     x'' = H u - D x' - G x,   H = l x' + b x + f,

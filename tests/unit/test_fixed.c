@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Saturating fixed-point arithmetic and the tan / cos / sin approximations. */
 #include "test_util.h"
 #include "pma/fixed.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* CFDL-MFAC (pma/mfac.h): reset rule, first step, limits, validation, and
  * float/fixed agreement. */
 #include "test_util.h"

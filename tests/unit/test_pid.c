@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* PID baseline (pma/pid.h): terms, derivative on measurement and its filter,
  * anti-windup, validation, float/fixed agreement. */
 #include "test_util.h"

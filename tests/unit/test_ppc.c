@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Properties of the paper's controller (pma/ppc.h), float and fixed point. */
 #include "test_util.h"
 #include "pma/ppc.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Reference generators and constraint band (pma/ref.h). */
 #include "test_util.h"
 #include "pma/ref.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Helpers of the C unit tests (tests/unit) on top of the shared test support (pma_test.h:
  * Unity, assert_near, test_rand_*): the Q16.16 conversions the tests write their values with. */
 #ifndef PMA_TEST_UTIL_H

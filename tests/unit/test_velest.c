@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Velocity estimators (pma/velest.h): ramp tracking, noise gain against the
  * documented formula, priming, validation, float/fixed agreement. */
 #include "test_util.h"

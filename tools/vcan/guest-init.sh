@@ -1,4 +1,5 @@
 #!/bin/bash
+# SPDX-License-Identifier: Apache-2.0
 # PID 1 of the User-Mode Linux guest of tools/vcan/with-vcan (which starts it through a
 # two-line wrapper naming the host's bash). The guest's root file system is the host's "/".
 # Environment (from the kernel command line): WITH_VCAN_DIR, the host's temporary folder of this

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * The xstate shim of tools/vcan/with-vcan, an LD_PRELOAD library for linux.uml.
  *

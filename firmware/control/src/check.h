@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Internal helpers for configuration validation (not part of the API). */
 #ifndef PMA_CHECK_H
 #define PMA_CHECK_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Saturating fixed-point arithmetic (see pma/fixed.h for formats).
  * Overflow checks are done in unsigned math; right shifts are only applied to
  * non-negative values, so every operation has defined behaviour in C11. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Internal fixed-point helpers shared by the *_q16 modules. */
 #ifndef PMA_FIXED_INTERNAL_H
 #define PMA_FIXED_INTERNAL_H

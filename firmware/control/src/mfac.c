@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* CFDL-MFAC: configuration and float variant (see pma/mfac.h). */
 #include "pma/mfac.h"
 #include "pma/status.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* CFDL-MFAC, fixed-point variant (see pma/mfac.h). Signals and parameters in
  * Q16.16; the squares and quotients of the update laws use 64-bit
  * intermediates (Q32) so that du^2 and phi^2 never saturate mid-computation;

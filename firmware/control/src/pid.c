@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* PID baseline: configuration and float variant (see pma/pid.h). */
 #include "pma/pid.h"
 #include "pma/status.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* PID baseline, fixed-point variant (see pma/pid.h). Signals and kp, kd/(tf+T)
  * in Q16.16; the filter pole tf/(tf+T), ki T and k_aw T in Q2.30 (so ki T and
  * k_aw T < 2); the integrator keeps 32 fractional bits so that the small

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Configuration of the paper's controller: defaults and validation shared by
  * the float and fixed-point variants. */
 #include "pma/ppc.h"

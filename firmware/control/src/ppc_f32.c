@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The paper's controller, float variant (eq. 15-22; see pma/ppc.h). */
 #include "pma/ppc.h"
 #include "pma/status.h"

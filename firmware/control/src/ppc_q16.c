@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The paper's controller, fixed-point variant (see pma/ppc.h).
  * Signals Q16.16 in the units of the float variant; alpha and the
  * normalised arguments r = lambda / w in Q2.30; reciprocals 1/w1, 1/w2, 1/t_u

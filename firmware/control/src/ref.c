@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Reference generators and the constraint band: configuration, bounds and
  * float variant (see pma/ref.h). Sines are evaluated from the fractional part
  * of the phase in turns, so long runs keep their precision. */

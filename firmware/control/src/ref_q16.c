@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Reference generators, fixed-point variant (see pma/ref.h). Positions in
  * Q16.16 cm, time in Q16.16 s (t >= 0). Phases are unsigned Q0.32 fractions
  * of a turn: their arithmetic wraps modulo one turn exactly (unsigned

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Float trigonometry for the float controllers (see pma/trig.h).
  * Coefficients from tools/fit_fixed_poly.py (tan: the degree-4 fit; cos: the
  * same degree-4 fit as the fixed-point version). */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Velocity estimators: configuration, noise gain and float variant
  * (see pma/velest.h). */
 #include "pma/velest.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Velocity estimators, fixed-point variant (see pma/velest.h). x and v in
  * Q16.16; p or ga and T in Q2.30; (1-p)/T or gb/T in Q16.16. The tracking
  * observer keeps its position estimate with 32 fractional bits so that the

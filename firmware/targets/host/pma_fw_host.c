@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* pma-fw-host: the firmware application on the Linux host port (SocketCAN).
  * The same application code as the board's; the position sensor and the
  * pressure output are bridged over CAN (PLANT_SENSOR in, PLANT_ACTUATOR out)

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* libpma_offline: see pma_offline.h. */
 #include "pma_offline.h"
 

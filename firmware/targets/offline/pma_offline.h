@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* libpma_offline: the firmware application on the fake port, as a shared
  * library for closed-loop runs without CAN (hil/offline.py loads it with
  * ctypes and steps it against the simulated rig, hil/rig.py).

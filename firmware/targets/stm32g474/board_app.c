@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The board's main-loop glue: see board_app.h. */
 #include "board_app.h"
 

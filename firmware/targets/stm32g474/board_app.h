@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The board's main-loop glue: everything of the STM32G474 firmware that is
  * not register access, in portable C over pma/hal.h, so the same object
  * code runs on the board and, against the fake HAL, in the emulated

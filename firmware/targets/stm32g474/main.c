@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The STM32G474 (NUCLEO-G474RE) firmware: the application on the board's
  * port. The reset handler (hal/portable/st/stm32g474/startup_stm32g474.c)
  * has already set up the FPU, the 170 MHz clock and the time base. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The port interface: the one header every HAL port implements (in the manner
  * of CANopenNode's CO_driver.h). Exactly one port is linked into a program,
  * chosen at link time (CMake: link `pma_hal` plus one of `pma_hal_fake`,

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Scaling between converter counts and physical units: pure functions, the
  * same for every port (they live in `pma_hal`, not in a port). The scaling
  * values come from the sensor's and regulator's data sheets and the board's

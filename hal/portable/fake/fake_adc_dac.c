@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Fake port: position sensor (ADC) with injectable faults, and the pressure
  * command output (DAC) with a log of recent writes. */
 #include "fake_internal.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Fake port: a CAN controller (RX queue, TX queue, acceptance filters, ISO
  * 11898-1 fault confinement with bus-off recovery) on a bus the test plays:
  * it injects received frames and pops the transmitted ones from a log. */

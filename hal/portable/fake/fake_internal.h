@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Internal to the fake port: how its device modules reset one another.
  * Each module (fake_*.c) keeps its own device state in static storage. */
 #ifndef PMA_FAKE_INTERNAL_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Fake port: RAM-backed NVM with flash semantics (erase to 0xFF, program only
  * over erased bytes, aligned to the program size), a power-cut injector that
  * can leave the interrupted operation partly applied, and optional ECC: a

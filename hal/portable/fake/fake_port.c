@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Fake port: initialisation and the three depths of reset (pma_hal_fake.h). */
 #include "fake_internal.h"
 

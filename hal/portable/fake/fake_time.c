@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Fake port: the test's clock, the control tick, the watchdog and the reset
  * cause. Time passes only when the test advances it or a tick wait sleeps. */
 #include "fake_internal.h"

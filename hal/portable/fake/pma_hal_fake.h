@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The fake port: pma/hal.h for tests, with a control API to feed it and to
  * inject faults. Link `pma_hal_fake` instead of a hardware port.
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Linux port: CAN on a SocketCAN raw socket (PF_CAN, SOCK_RAW, CAN_RAW),
  * non-blocking, classic 11-bit data frames only.
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Linux port, pure parts of CAN: the RX ring and the decoding of SocketCAN
  * error frames into ISO 11898-1 fault confinement. No system calls here, so
  * the host tests check them directly (under ASan, which the vcan tests

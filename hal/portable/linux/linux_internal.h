@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Internal to the Linux port: how its modules (linux_*.c) call one another,
  * and the pure parts (RX ring, error-frame decoding) that the host tests
  * exercise directly. Each module keeps its device state in static storage:

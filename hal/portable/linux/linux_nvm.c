@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Linux port: NVM in a file with flash semantics (the rules of pma/hal.h,
  * as the fake enforces them): erase sets a block to 0xFF, program writes
  * only over erased bytes, in units of PMA_HAL_LINUX_NVM_PROGRAM_SIZE. The

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Linux port: initialisation, the error message, and the converters this
  * port does not have (ADC, DAC: bridged over CAN in the host build). */
 #define _GNU_SOURCE

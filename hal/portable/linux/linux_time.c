@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Linux port: the clock (CLOCK_MONOTONIC) and the control tick, either in
  * real time (absolute deadlines, so that lateness never accumulates) or in
  * lockstep with received frames (linux_can.c decides what a tick frame is). */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Linux port: a software watchdog and the reset cause.
  *
  * The watchdog is a thread (started by the first pma_hal_watchdog_start(),

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The Linux host port of pma/hal.h: CAN on SocketCAN, time from
  * CLOCK_MONOTONIC, the control tick from an absolute-deadline sleep (real
  * time) or from received frames (lockstep), NVM in a file with flash

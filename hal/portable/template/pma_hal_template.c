@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Blank template port: every function of pma/hal.h, doing nothing.
  *
  * Copy this directory to hal/portable/<vendor>/<mcu>/ to start a port and

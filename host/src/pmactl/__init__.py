@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """pmactl: the Python client and command-line tool for PMA controller nodes on CAN.
 
 The protocol comes from the firmware's own single sources of truth, shipped with

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """What to do when a CAN interface does not open: python-can's reason plus the step that
 fixes it (docs/adapters.md).
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """pmactl: tune, command and watch PMA nodes over CAN (the command line; the protocol
 logic is in pmactl.client)."""
 from __future__ import annotations

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The protocol client: one class, used by pmactl, the HIL harness and the tests.
 
 PmaNode talks to one node over any python-can bus (socketcan, pcan, kvaser,

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Node identity: DEVICE_INFO (firmware version, build, protocol version, parameter table hash,
 unique device id), asked of one node (DEVICE_INFO_REQ) or of every node at once
 (DEVICE_INFO_REQ_ALL: how a scan finds two devices answering on one node id).

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """A DBC for a bus of several nodes, generated from the protocol's one DBC.
 
 firmware/protocol/pma_proto.dbc lists each message once, at its base id (node 0): a frame

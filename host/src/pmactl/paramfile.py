@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Parameter files: a node's parameters as JSON (or YAML, when PyYAML is installed).
 
     {

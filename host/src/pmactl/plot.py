@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Figures of a recording, in the style of the paper's (Li and Gao, Figs. 4-8): one panel
 per quantity over time, lettered (a) position and reference, (b) error with the
 assigned accuracy +-w1, (c) velocity, (d) input u, (e) pressure command. Rendered with

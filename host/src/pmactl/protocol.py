@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The CAN protocol and parameter table, loaded from the firmware's sources.
 
 Frame id = base id + node id (node 0..15); the DBC lists the base ids (node 0).

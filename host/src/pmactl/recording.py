@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The telemetry recording's CSV format (written by client.TelemetryRecorder, read by plot).
 
 One row per telemetry tick (TELEM_A and the TELEM_B..E frames that followed it), one

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """pmactl scope: a live view of running nodes' telemetry.
 
 Four panels over a rolling window of host time (0 = now, in s): (a) the position x and

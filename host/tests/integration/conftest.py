@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """pmactl against the firmware: pma-fw-host on vcan0, pmactl run as a program (the
 installed console script, in a subprocess), a simulated plant behind the plant bridge.
 Run through hil/with-vcan, which provides vcan0 (natively or in a User-Mode Linux guest):

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Shared by the integration tests and their conftest: where pma-fw-host and pmactl
 are, running pmactl as a program, and one pma-fw-host process."""
 from __future__ import annotations

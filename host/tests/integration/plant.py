@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """A simulated plant behind the plant bridge, in a thread: the rig side of
 PLANT_SENSOR / PLANT_ACTUATOR for pma-fw-host in lockstep mode (one sample is one
 control tick).

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """pmactl (the installed program, in a subprocess) against pma-fw-host over vcan0.
 
     hil/with-vcan .venv/bin/python -m pytest host/tests/integration -q

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The worked tuning session of docs/tuning.md, run for real: pma-fw-host in lockstep
 mode on vcan0 with the simulated plant (plant.py: eq. 7 with the firmware's closed-loop
 test coefficients, 5 um sensor noise), pmactl as a program. It checks the paper's

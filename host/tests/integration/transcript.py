@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """docs/tuning.md quotes the worked session that test_tuning_session.py runs: each
 ```console block of its session is a stretch of the run's transcript. These helpers
 compare the two, and rewrite the blocks from a transcript (PMACTL_SESSION_OUT):

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Saturating fixed-point arithmetic used by the *_q16 control variants.
  *
  * Formats (all signed two's complement in int32_t):

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Compact-form dynamic-linearisation model-free adaptive control (CFDL-MFAC,
  * Hou and Jin), the paper's baseline. At sample k, output y(k) = x(k), input
  * u(k), reference y*(k+1) for the next sample:

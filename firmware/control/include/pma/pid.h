@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* PID baseline: parallel form on the error e = r - y (note: the opposite sign
  * of the paper's e = x - x_r, so positive gains suit a positive plant gain),
  * derivative on the measurement (no kick on reference steps) through a

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The paper's controller (Li & Gao, "Tracking control for pneumatic muscle
  * actuators with unknown dynamics and output constraints", eq. 15-22): a
  * prescribed-performance / error-transformation law with a tuning function.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Reference generators x_r(t) and the constraint band k_low < x < k_high.
  *
  *   HOLD   x_r = offset

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Error codes shared by every firmware module: one enum of negative codes
  * (0 is success), in the manner of littlefs' enum lfs_error. New modules
  * append codes; existing values never change (they travel in CAN replies). */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Float trigonometry of the float controllers: the two functions the paper's
  * law needs, on the ranges it uses, without libm's general argument reduction
  * (tanf + cosf cost ~120 instructions on a Cortex-M4F and ~6,000 with soft

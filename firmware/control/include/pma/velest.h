@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Velocity estimation from sampled positions (the paper's controller needs
  * x', which no sensor on the rig measures). Two estimators:
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* ADC1 for the position sensor and DAC1 for the pressure command (RM0440
  * sections 21 and 22). Front ends: docs/hardware.md.
  *

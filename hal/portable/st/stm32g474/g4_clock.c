@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Clock tree, GPIO and reset cause (RM0440 sections 6, 7, 9). */
 #include "g4_drivers.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The vendor headers of the STM32G474 port, fetched (never copied into the
  * repository) by tools/fetch-deps.sh into .deps/ and found through the
  * include directories cmake/PmaDeps.cmake checks:

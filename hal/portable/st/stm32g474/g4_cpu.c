@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Board-only primitives: the CPU instructions the drivers need (CMSIS-Core,
  * core_cm4.h via g4_cmsis.h), and the two register behaviours a host test's
  * RAM register file fakes (g4_io.h). */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The STM32G474 port's drivers (one file each), below the port interface
  * (pma_hal_stm32g474.c implements pma/hal.h with them). Register access only
  * through g4_io (g4_io.h), so tests/board/test_g4_drivers.c runs every driver

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* FDCAN1 in classic CAN mode (RM0440 section 44).
  *
  * Pins: PA11 = FDCAN1_RX, PA12 = FDCAN1_TX (AF9), to a 3.3 V transceiver

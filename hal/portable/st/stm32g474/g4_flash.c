@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Parameter storage in the last two flash pages (RM0440 section 3).
  *
  * Block 0 and 1 of pma/hal.h's NVM are pages 126 and 127: of bank 2 in the

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The register blocks (g4_io.h) and the NVIC helpers. */
 #include "g4_drivers.h" /* G4_NVM_BASE */
 

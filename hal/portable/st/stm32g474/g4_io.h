@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Register access of the STM32G474 port. Every driver reaches its registers
  * through the register-block pointers in g4_io (never through ST's fixed
  * RCC, FDCAN1 ... macros), so that a host test can point a peripheral at a

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Independent watchdog (RM0440 section 41), clocked by the LSI (32 kHz
  * nominal, 29.5..34 kHz: a timeout is within -8 %..+6 % of the request). */
 #include "g4_drivers.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* What the STM32G474 port needs beyond ST's CMSIS device header
  * (g4_cmsis.h): values that ST keeps in its HAL drivers rather than in
  * stm32g474xx.h, and the FDCAN message RAM layout, which the header gives

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Time base (TIM2) and control tick (TIM6), RM0440 sections 28 and 30.
  *
  * Shared with the interrupts: tim2_wraps and ticks are written only by

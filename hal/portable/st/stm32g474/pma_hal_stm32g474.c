@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* pma/hal.h on the STM32G474 (the port's functions over its drivers, g4_*.c). */
 #include "pma_hal_stm32g474.h"
 

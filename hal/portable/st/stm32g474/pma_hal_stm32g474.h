@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The STM32G474 port (NUCLEO-G474RE): what it adds to pma/hal.h.
  *
  * Devices (docs/hardware.md has the wiring):

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Start-up of the STM32G474: vector table, reset handler (.data copy, .bss
  * clear, FPU on), the interrupt handlers of the port, and the default
  * handler. Symbols from stm32g474re.ld: _estack, _sidata, _sdata, _edata,
