@@ -28,13 +28,26 @@ print_durations() {
   exit "$rc"
 }
 trap print_durations EXIT
-# stage NAME COMMAND...: runs COMMAND as one stage and records its duration.
+# stage NAME COMMAND...: runs COMMAND as one stage and records its duration. A failing stage
+# ends the run, unless PMA_KEEP_GOING=1: then every stage runs and the run fails at the end.
+FAILED_STAGES=0
 stage() {
   STAGE_NAME=$1
   shift
   echo "== $STAGE_NAME"
   STAGE_T0=$SECONDS
-  "$@"
+  if [[ ${PMA_KEEP_GOING:-0} == 1 ]]; then
+    local rc=0
+    "$@" || rc=$?
+    if ((rc != 0)); then
+      STAGE_LINES+=("$(printf '%6d s  %s  (FAILED, exit %d)' $((SECONDS - STAGE_T0)) "$STAGE_NAME" "$rc")")
+      FAILED_STAGES=$((FAILED_STAGES + 1))
+      STAGE_NAME=""
+      return 0
+    fi
+  else
+    "$@"
+  fi
   STAGE_LINES+=("$(printf '%6d s  %s' $((SECONDS - STAGE_T0)) "$STAGE_NAME")")
   STAGE_NAME=""
 }
@@ -64,3 +77,7 @@ stage "offline (libpma_offline.so) vs that lockstep run over vcan: identical fig
 stage "HIL lockstep benchmark (printed, never asserted)" \
   .venv/bin/python -m hil bench --seconds 5
 stage "fuzz (libFuzzer on the CAN frame handler, ASan + UBSan, 60 s)" bash tools/fuzz.sh 60
+if ((FAILED_STAGES > 0)); then
+  echo "run-tests: $FAILED_STAGES stage(s) failed (PMA_KEEP_GOING=1)"
+  exit 1
+fi
