@@ -23,6 +23,7 @@ PROTO = load_protocol()
 TIMEOUT = f"{REPLY_TIMEOUT_S:g}"      # pmactl --timeout of the programs started here (fwhost.py)
 # pmactl scan listens this long (wall time) for heartbeats (every 100 ms of wall time): long
 # enough for a node that waits for the CPU now and then on a loaded machine
+REPO = Path(__file__).resolve().parents[3]
 SCAN_S = "2"
 # safety.host_timeout_ms in control ticks (sys.tick_hz 1000, lockstep: one tick per plant sample)
 HOST_TIMEOUT_TICKS = int(PROTO.param("safety.host_timeout_ms").default)
@@ -37,8 +38,11 @@ def test_scan_status_and_parameters(firmware, pmactl, tmp_path: Path) -> None:
     firmware(node=3)
     r = pmactl("scan", "--seconds", SCAN_S)
     assert r.code == 0, r.err
-    assert r.out.splitlines()[1].split() == ["3", "IDLE", "NONE", "PPC", "HOLD", "PLANT_BRIDGE", "LOCKSTEP",
-                                             "PARAMS_DEFAULT"]
+    cells = r.out.splitlines()[1].split()
+    assert cells[:5] == ["3", "IDLE", "NONE", "PPC", "HOLD"]
+    assert cells[-3:] == ["PLANT_BRIDGE", "LOCKSTEP", "PARAMS_DEFAULT"]
+    assert cells[5].startswith((REPO / "VERSION").read_text().strip())   # firmware, then unique id
+    assert len(cells[6]) == 24
     r = pmactl("status", node=3)
     assert r.code == 0
     assert "flags        0x0016 PLANT_BRIDGE LOCKSTEP PARAMS_DEFAULT" in r.out
@@ -86,7 +90,9 @@ def test_scan_status_and_parameters(firmware, pmactl, tmp_path: Path) -> None:
     path.write_text(json.dumps(doc))
     r = pmactl("params", "load", str(path), node=3)
     assert r.code == 0, r.err
-    assert f"2 set, {len(PROTO.params) - 2} unchanged, 0 rejected" in r.out
+    # sys.node_id is not loaded unless asked (--with-node-id)
+    assert f"2 set, {len(PROTO.params) - 3} unchanged, 0 rejected" in r.out
+    assert "sys.node_id not loaded" in r.out
     r = pmactl("status", node=3)
     assert "controller   MFAC (2)" in r.out and "PARAMS_CHANGED" in r.out
     bad = tmp_path / "bad.json"
