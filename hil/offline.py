@@ -363,7 +363,7 @@ def run_lane(sc: Scenario, index: int, quick: bool, force_run: bool = False) -> 
                     if ev.action == "host_heartbeat":
                         host_hb = bool(ev.value)
                     else:
-                        _apply_rig_event(rig, ev.action, ev.value)
+                        rig.apply_event(ev.action, ev.value)
                 if n >= next_hb:
                     next_hb = n + hb_every
                     heartbeat()
@@ -381,19 +381,6 @@ def run_lane(sc: Scenario, index: int, quick: bool, force_run: bool = False) -> 
                      start_result=start_result, final_dac=last[0], final_active=last[1],
                      data=rec.trimmed(0) if rec.n > 0 else None, telem=telem)
     return LaneRun(index, res, rec.n, run_ticks, loop_s, error)
-
-
-def _apply_rig_event(rig: Rig, action: str, value: float) -> None:
-    if action == "load_mass":
-        rig.set_load_mass(value)
-    elif action == "bias_force":
-        rig.set_bias_force(value)
-    elif action == "disturbance":
-        rig.set_disturbance(value)
-    elif action == "wire_break":
-        rig.break_wire(bool(value))
-    elif action == "sensor_block":
-        rig.set_sensor_blocked(bool(value))
 
 
 # -------------------------------------------------------------------- a scenario --

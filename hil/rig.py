@@ -196,6 +196,23 @@ class Rig:
         """The laser loses its target (or it leaves the range): 4 mA, like out of range."""
         self._blocked = bool(on)
 
+    def apply_event(self, action: str, value: float) -> bool:
+        """A scenario event (hil/scenario.py [[events]]) that acts on the rig; False for one
+        that does not (e.g. host_heartbeat, which acts on the host side)."""
+        if action == "load_mass":
+            self.set_load_mass(value)          # kg
+        elif action == "bias_force":
+            self.set_bias_force(value)         # N
+        elif action == "disturbance":
+            self.set_disturbance(value)        # N
+        elif action == "wire_break":
+            self.break_wire(bool(value))
+        elif action == "sensor_block":
+            self.set_sensor_blocked(bool(value))
+        else:
+            return False
+        return True
+
     # ------------------------------------------------------------- the output
     def sensor_counts(self) -> int:
         """One ADC sample of the position sensor (PLANT_SENSOR RawCounts)."""

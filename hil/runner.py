@@ -412,18 +412,9 @@ class Runner:
 
     def _apply_event(self, action: str, value: float) -> None:
         for lane in self.lanes:
-            rig = lane.rig
-            if action == "load_mass":
-                rig.set_load_mass(value)
-            elif action == "bias_force":
-                rig.set_bias_force(value)
-            elif action == "disturbance":
-                rig.set_disturbance(value)
-            elif action == "wire_break":
-                rig.break_wire(bool(value))
-            elif action == "sensor_block":
-                rig.set_sensor_blocked(bool(value))
-            elif action == "host_heartbeat":
+            if lane.rig.apply_event(action, value):
+                continue
+            if action == "host_heartbeat":
                 lane.host_heartbeat = bool(value)
 
     def _stop_requested(self) -> bool:
