@@ -36,11 +36,13 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+from pmactl.rules import RuleError, set_order
+
 from . import scenario as scn
 from .report import print_summary
 from .rig import Rig
 from .rig_params import RigParams
-from .scenario import Scenario, ScenarioError, protocol
+from .scenario import RULE_PARAMS, Scenario, ScenarioError, protocol
 from .summary import PHASE_ARMED, PHASE_IDLE, PHASE_RUNNING, LaneResult, Recorder, jsonable, summarise
 
 REPO = Path(__file__).resolve().parents[1]
@@ -267,9 +269,10 @@ def run_lane(sc: Scenario, index: int, quick: bool, force_run: bool = False) -> 
     rig = Rig(sc.rig_params(), seed=sc.seed)
     params = sc.node_params(ctrl)
     try:
-        for name, value in params.items():
-            fw.set(name, value)
-    except ParamError as e:
+        # in the order the runner sets them over CAN (every rule a SET enforces kept)
+        for name in set_order({n: fw.get(n) for n in RULE_PARAMS}, params):
+            fw.set(name, params[name])
+    except (ParamError, RuleError) as e:
         res = LaneResult(ctrl=ctrl, node=node_id, rig=rig, params=params, params_read_back={},
                          state=fw.state_name(), fault_code=fw.fault_name(), start_result="",
                          final_dac=0, final_active=0, data=None)

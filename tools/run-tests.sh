@@ -3,15 +3,37 @@
 # All tests, from a fresh Debian 12 / Ubuntu machine: set-up, then every
 # preset's CTest suite (Unity; host with ASan/UBSan; Cortex-M4F, M3, M0 under QEMU),
 # the generated code's freshness, the Python tests (numpy golden reference,
-# protocol and DBC consistency, the offline runs' library layer), the
-# hil/with-vcan tests, the integration tests of pma-fw-host over vcan, the HIL
-# acceptance tests (the paper's experiments over vcan), an offline run against
-# the same run over vcan, the main job's quick variant, the HIL benchmark, and a
-# bounded libFuzzer run of the CAN frame handler. Exits non-zero on any failure.
-# Prints each stage's duration at the end (also when a stage fails).
+# protocol and DBC consistency, the offline runs' library layer), the HIL
+# acceptance tests (the paper's experiments, on the real firmware offline), the
+# hil/with-vcan tests, the pmactl unit tests; then side by side in two vcan guests:
+# the integration tests of pma-fw-host and pmactl over vcan | the main job's quick
+# variant, the HIL checks only the CAN path has, the offline runs against lockstep
+# runs over vcan (to the last digit), the HIL benchmark; and a bounded libFuzzer
+# run of the CAN frame handler. Exits non-zero on any failure. Prints each stage's
+# duration at the end (also when a stage fails).
+#
+#   bash tools/run-tests.sh           # everything (the README's test command, CI)
+#   bash tools/run-tests.sh --quick   # host C tests and the Python tests without CAN
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$ROOT"
+
+QUICK=0
+case ${1:-} in
+  "") ;;
+  --quick) QUICK=1 ;;
+  -h | --help)
+    echo "usage: bash tools/run-tests.sh [--quick]"
+    echo "  (none)   every test (the README's test command, what CI runs)"
+    echo "  --quick  set-up, the host build and its C tests, the Python tests that need no CAN"
+    echo "           and no slow offline runs (pytest -m 'not slow'); a few minutes"
+    exit 0
+    ;;
+  *)
+    echo "run-tests: unknown option '$1' (try --help)" >&2
+    exit 2
+    ;;
+esac
 
 STAGE_LINES=()
 STAGE_NAME=""
@@ -52,30 +74,113 @@ stage() {
   STAGE_NAME=""
 }
 
+# side_by_side NAME_A FUNCTION_A NAME_B FUNCTION_B: two stages at once (each starts vcan
+# guests of its own: the guest has one CPU, the machine two), their output in build/ci-logs/
+# and printed when both have ended, a progress line every minute meanwhile. Both always run
+# to their end; the run fails after them if either failed (at once unless PMA_KEEP_GOING=1).
+side_by_side() {
+  local names=("$1" "$3") funcs=("$2" "$4") logs="$ROOT/build/ci-logs" i
+  mkdir -p "$logs"
+  rm -f "$logs"/lane[01].seconds
+  local pids=() t0=$SECONDS
+  for i in 0 1; do
+    (
+      set -e # the first failing command ends the lane (not in a tested context: keeps -e)
+      t=$SECONDS
+      trap 'echo $((SECONDS - t)) >"$logs/lane$i.seconds"' EXIT
+      "${funcs[$i]}"
+    ) >"$logs/lane$i.log" 2>&1 &
+    pids+=($!)
+  done
+  echo "== side by side: ${names[0]} | ${names[1]} (output in build/ci-logs/lane0.log, lane1.log)"
+  local next=$((SECONDS + 60))
+  while kill -0 "${pids[0]}" 2>/dev/null || kill -0 "${pids[1]}" 2>/dev/null; do
+    sleep 2
+    if ((SECONDS >= next)); then
+      next=$((SECONDS + 60))
+      for i in 0 1; do
+        kill -0 "${pids[$i]}" 2>/dev/null &&
+          printf '   %4d s  running: %s: %s\n' $((SECONDS - t0)) "${names[$i]}" \
+            "$(tail -c 300 "$logs/lane$i.log" | tr '\r' '\n' | grep -v '^ *$' | tail -n 1 | cut -c1-100)"
+      done
+    fi
+  done
+  local rcs=() failed=0
+  for i in 0 1; do
+    local rc=0
+    wait "${pids[$i]}" || rc=$?
+    rcs+=("$rc")
+    echo "== ${names[$i]}"
+    cat "$logs/lane$i.log"
+    local took
+    took=$(cat "$logs/lane$i.seconds" 2>/dev/null || echo $((SECONDS - t0)))
+    if ((rc != 0)); then
+      STAGE_LINES+=("$(printf '%6d s  %s  (FAILED, exit %d; side by side)' "$took" "${names[$i]}" "$rc")")
+      failed=$((failed + 1))
+    else
+      STAGE_LINES+=("$(printf '%6d s  %s  (side by side)' "$took" "${names[$i]}")")
+    fi
+  done
+  STAGE_LINES+=("$(printf '%6d s  (both of the above, side by side)' $((SECONDS - t0)))")
+  if ((failed > 0)); then
+    if [[ ${PMA_KEEP_GOING:-0} == 1 ]]; then
+      FAILED_STAGES=$((FAILED_STAGES + failed))
+    else
+      exit 1
+    fi
+  fi
+}
+
+# The firmware over vcan: its CAN interface, commands, parameters, storage, faults and identity,
+# and pmactl driving it (in the first guest; docs/tuning.md's session runs in the second).
+vcan_integration() {
+  hil/with-vcan .venv/bin/python -m pytest -q tests/integration host/tests/integration/test_pmactl_fw.py
+}
+
+# The HIL harness over vcan (in the second guest, one after the other): the README main job's
+# quick variant; what only the CAN path has (bus log, identity, clean stops, --board); the
+# offline runs against lockstep runs over vcan, to the last digit (that quick run and a fault);
+# the tuning session of docs/tuning.md; the lockstep benchmark (printed, never asserted).
+vcan_hil() {
+  echo "-- the README's main job, quick variant (Case 3, first 30 s, PPC vs MFAC)"
+  env OUT=build/hil/ci-quick bash tools/run-demo.sh --quick --no-progress
+  echo "-- HIL over vcan: bus log, identity, clean stops, --board; offline == over CAN"
+  PMA_OFFLINE_COMPARE_RUN=build/hil/ci-quick hil/with-vcan .venv/bin/python -m pytest -q \
+    hil/tests/test_hil_acceptance.py hil/tests/test_offline_vs_hil.py
+  echo "-- docs/tuning.md's worked tuning session, pmactl against pma-fw-host over vcan"
+  hil/with-vcan .venv/bin/python -m pytest -q host/tests/integration/test_tuning_session.py
+  echo "-- HIL lockstep benchmark (printed, never asserted)"
+  .venv/bin/python -m hil bench --seconds 2
+}
+
+
+NO_CAN_TESTS=(tests/golden tests/protocol hil/tests/test_rig.py hil/tests/test_rig_profiles.py
+  hil/tests/test_scenarios.py hil/tests/test_offline.py hil/tests/test_metrics_names.py
+  hil/tests/test_param_rules.py)
+
 stage "set-up (tools/setup.sh)" bash tools/setup.sh
 stage "generated code and docs are current (tools/gen_protocol.py --check)" \
   .venv/bin/python tools/gen_protocol.py --check
+if ((QUICK)); then
+  stage "build host, host-offline (tools/build-all.sh)" bash tools/build-all.sh host host-offline
+  stage "ctest host" ctest --preset host -j2
+  stage "pytest (no CAN, not slow)" .venv/bin/python -m pytest -q -m "not slow" "${NO_CAN_TESTS[@]}"
+  stage "pmactl unit tests (python-can virtual bus, no CAN)" \
+    .venv/bin/python -m pytest -q host/tests --ignore=host/tests/integration
+  exit 0
+fi
 stage "build every preset (tools/build-all.sh)" bash tools/build-all.sh
 for p in host cortex-m4f cortex-m3 cortex-m0; do
   stage "ctest $p" ctest --preset "$p" -j2
 done
-stage "pytest (no CAN)" .venv/bin/python -m pytest -q tests/golden tests/protocol \
-  hil/tests/test_rig.py hil/tests/test_rig_profiles.py hil/tests/test_scenarios.py \
-  hil/tests/test_offline.py hil/tests/test_metrics_names.py hil/tests/test_param_rules.py
+stage "pytest (no CAN)" .venv/bin/python -m pytest -q "${NO_CAN_TESTS[@]}"
+stage "HIL acceptance offline (the paper's Cases 1-3, MFAC, PID, load change, constraint, faults; libpma_offline.so)" \
+  .venv/bin/python -m pytest -q hil/tests/test_acceptance.py
 stage "hil/with-vcan" bash hil/tests/test_with_vcan.sh
 stage "pmactl unit tests (python-can virtual bus, no CAN)" \
   .venv/bin/python -m pytest -q host/tests --ignore=host/tests/integration
-stage "integration tests over vcan (pma-fw-host, python-can, can-utils, pmactl)" \
-  hil/with-vcan .venv/bin/python -m pytest -q tests/integration host/tests/integration
-stage "HIL acceptance over vcan (the paper's Cases 1-3, MFAC, PID, load change, constraint, faults)" \
-  hil/with-vcan .venv/bin/python -m pytest -q hil/tests/test_hil_acceptance.py
-stage "the README's main job, quick variant (Case 3, first 30 s, PPC vs MFAC)" \
-  env OUT=build/hil/ci-quick bash tools/run-demo.sh --quick --no-progress
-stage "offline (libpma_offline.so) vs that lockstep run over vcan: identical figures and signals" \
-  env PMA_OFFLINE_COMPARE_RUN=build/hil/ci-quick .venv/bin/python -m pytest -q \
-  hil/tests/test_offline_vs_hil.py
-stage "HIL lockstep benchmark (printed, never asserted)" \
-  .venv/bin/python -m hil bench --seconds 5
+side_by_side "integration tests over vcan (pma-fw-host, python-can, can-utils, pmactl)" vcan_integration \
+  "HIL over vcan (main job quick, CAN-only checks, offline == over CAN, tuning session, benchmark)" vcan_hil
 stage "fuzz (libFuzzer on the CAN frame handler, ASan + UBSan, 60 s)" bash tools/fuzz.sh 60
 if ((FAILED_STAGES > 0)); then
   echo "run-tests: $FAILED_STAGES stage(s) failed (PMA_KEEP_GOING=1)"

@@ -1,14 +1,16 @@
 # SPDX-License-Identifier: Apache-2.0
-"""The offline runs are the real firmware: Case 3 (quick, 30 s, all four controllers) offline
-(libpma_offline.so, hil/offline.py) and in lockstep over vcan (pma-fw-host, hil/runner.py) give
-the same figures to the last digit, and the same signals tick for tick.
+"""The offline runs are the real firmware: Case 3 (quick, 30 s, all four controllers) and the
+wire-break fault, offline (libpma_offline.so, hil/offline.py) and in lockstep over vcan
+(pma-fw-host, hil/runner.py), give the same figures to the last digit, and the same signals
+tick for tick. This is what lets hil/tests/test_acceptance.py assert the paper's experiments
+on offline runs.
 
     hil/with-vcan .venv/bin/python -m pytest -q hil/tests/test_offline_vs_hil.py
 
 With PMA_OFFLINE_COMPARE_RUN=DIR it takes the over-CAN side from a lockstep run already made
 of Case 3 quick (DIR/summary.json and DIR/signals.npz; the CI passes the README main job's
 quick run, `tools/run-demo.sh --quick`, its lanes ppc and mfac) and runs only the offline side,
-on the same lanes: then no vcan is needed.
+on the same lanes; the wire break still runs over vcan (skipped without it).
 
 Both run the same application code, compiled by the same compiler with the same flags (-O2;
 the library is position-independent, which changes no arithmetic), fed the same frames in the
@@ -35,46 +37,56 @@ from hil.runner import Runner, RunOptions
 from hil.summary import jsonable
 
 GIVEN_RUN = os.environ.get("PMA_OFFLINE_COMPARE_RUN")
-pytestmark = pytest.mark.skipif(not GIVEN_RUN and not Path("/sys/class/net/vcan0").exists(),
+HAVE_VCAN = Path("/sys/class/net/vcan0").exists()
+pytestmark = [pytest.mark.vcan, pytest.mark.skipif(not GIVEN_RUN and not HAVE_VCAN,
                                 reason="needs vcan0 (run under hil/with-vcan) or "
-                                       "PMA_OFFLINE_COMPARE_RUN")
+                                       "PMA_OFFLINE_COMPARE_RUN")]
 
-SCENARIO = "case3"
+# Case 3 quick: the paper's experiment, every controller (or the given run's lanes); the wire
+# break: a fault, the safe state and the run's last ticks (run over vcan here, 5 s)
+SCENARIOS = ["case3", "wire_break"]
 # run-specific, not figures of the controllers: where and how fast it ran
 NOT_COMPARED = {"benchmark", "wall_s", "bus_log", "bus_dbc", "offline", "errors", "identity"}
 
 
-@pytest.fixture(scope="module")
-def both(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, Any], dict[str, Any], Path, Path]:
+@pytest.fixture(scope="module", params=SCENARIOS)
+def both(request: pytest.FixtureRequest,
+         tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, Any], dict[str, Any], Path, Path]:
     assert offline.LIB_PATH.exists(), f"{offline.LIB_PATH} missing: {offline.BUILD_HINT}"
-    off_out = tmp_path_factory.mktemp("offline")
-    sc = scn.load(SCENARIO)
-    if GIVEN_RUN:
+    name = request.param
+    off_out = tmp_path_factory.mktemp(f"offline-{name}")
+    sc = scn.load(name)
+    quick = name == "case3"
+    if GIVEN_RUN and name == "case3":
         hil_out = Path(GIVEN_RUN)
         over_can = json.loads((hil_out / "summary.json").read_text())
         assert over_can["quick"] is True and over_can["scenario"] == sc.name, \
-            f"{hil_out} is not a quick run of {SCENARIO}"
+            f"{hil_out} is not a quick run of {name}"
         sc.controllers = [c for c in sc.controllers if c.label in over_can["controllers"]]
     else:
+        if not HAVE_VCAN:
+            pytest.skip(f"{name} over CAN needs vcan0 (run under hil/with-vcan)")
         assert FW_HOST.exists(), f"{FW_HOST} missing: {BUILD_HINT}"
-        hil_out = tmp_path_factory.mktemp("hil")
-        over_can = Runner(sc, RunOptions(out=hil_out, quick=True, progress=False)).run()
+        hil_out = tmp_path_factory.mktemp(f"hil-{name}")
+        over_can = Runner(sc, RunOptions(out=hil_out, quick=quick, progress=False)).run()
     assert not over_can["errors"], over_can["errors"]
-    off = offline.run_scenarios([sc], quick=True, jobs=1, out=off_out)[0]
+    off = offline.run_scenarios([sc], quick=quick, jobs=1, out=off_out)[0]
     assert not off["errors"], off["errors"]
     return over_can, off, hil_out, off_out
 
 
 def test_every_figure_is_the_same_to_the_last_digit(both):
     over_can, off, _, _ = both
-    expected = {"ppc", "mfac"} if GIVEN_RUN else {"ppc", "ppc-paper", "mfac", "pid"}
-    assert set(over_can["controllers"]) == expected
+    if over_can["scenario"] == "case3":
+        expected = {"ppc", "mfac"} if GIVEN_RUN else {"ppc", "ppc-paper", "mfac", "pid"}
+        assert set(over_can["controllers"]) == expected
     for key in set(over_can) | set(off):
         if key in NOT_COMPARED:
             continue
         assert jsonable(off.get(key)) == jsonable(over_can.get(key)), key   # NaN as None
     for label, c in over_can["controllers"].items():
-        print(label, "RMSTE", c["rmste_cm"], "chatter", c["chatter_ratio"])
+        print(over_can["scenario"], label, "RMSTE", c["rmste_cm"], "chatter", c["chatter_ratio"],
+              "state", over_can["state"][label], over_can["fault_code"][label])
 
 
 def test_every_signal_is_the_same_tick_for_tick(both):
