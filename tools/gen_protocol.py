@@ -240,10 +240,30 @@ def gen_proto_version() -> str:
             + f"#define PMA_PROTO_VERSION {protocol_version(db)}u\n\n#endif /* PMA_PROTO_VERSION_H */\n")
 
 
+def gen_proto_senders() -> str:
+    """X-macro lists of the messages each DBC node sends, so C code that checks or routes
+    frames by sender (tests/fuzz/fuzz_frames.c) reads the DBC's list instead of a copy."""
+    db = cantools.database.load_file(str(DBC))
+    assert isinstance(db, cantools.database.can.Database)
+    out = [HEADER_NOTE.format(src="firmware/protocol/pma_proto.dbc"),
+           "#ifndef PMA_PROTO_SENDERS_H\n#define PMA_PROTO_SENDERS_H\n\n",
+           "/* The messages each node of the DBC sends, in frame id order:\n",
+           " * X(NAME, base frame id (node id 0), length in bytes). */\n"]
+    for node in sorted(n.name for n in db.nodes):
+        msgs = sorted((m for m in db.messages if node in m.senders), key=lambda m: m.frame_id)
+        out.append(f"#define PMA_PROTO_{node.upper()}_TX_MESSAGES(X)")
+        for m in msgs:
+            out.append(f" \\\n    X({m.name}, 0x{m.frame_id:x}u, {m.length}u)")
+        out.append("\n\n")
+    out.append("#endif /* PMA_PROTO_SENDERS_H */\n")
+    return "".join(out)
+
+
 def outputs() -> dict[Path, str]:
     params = load_params()
     res = {PROTO_OUT / n: t for n, t in gen_codec().items()}
     res[PROTO_OUT / "pma_proto_version.h"] = gen_proto_version()
+    res[PROTO_OUT / "pma_proto_senders.h"] = gen_proto_senders()
     res[PARAM_OUT / "pma_param_table.h"] = gen_param_header(params)
     res[PARAM_OUT / "pma_param_table.c"] = gen_param_source(params)
     res[PARAM_DOC] = gen_param_doc(params)

@@ -58,6 +58,7 @@
 #include "actuator.h"
 #include "app.h"
 #include "generated/pma_proto.h"
+#include "generated/pma_proto_senders.h"
 #include "params.h"
 #include "pma/hal.h"
 #include "pma_hal_fake.h"
@@ -130,7 +131,7 @@ static struct {
     uint32_t ticks;            /* budget */
     /* TX frames popped by drain() since reset_tx_seen() */
     struct {
-        uint32_t total, ack, resp, actuator, heartbeat, telem;
+        uint32_t total, ack, resp, actuator, heartbeat, telem, info;
         struct pma_proto_command_ack_t last_ack;
         uint8_t last_resp[8];
         struct pma_proto_plant_actuator_t act[8];
@@ -276,18 +277,15 @@ static void reset_tx_seen(void)
     memset(&w.tx, 0, sizeof w.tx);
 }
 
+/* The DBC's length of a message this node (DBC node PMA) sends; 0xFF for any other id
+ * (the list is generated from the DBC: generated/pma_proto_senders.h). */
 static uint8_t dbc_length(uint16_t base)
 {
     switch (base) {
-    case PMA_PROTO_PLANT_ACTUATOR_FRAME_ID: return PMA_PROTO_PLANT_ACTUATOR_LENGTH;
-    case PMA_PROTO_COMMAND_ACK_FRAME_ID: return PMA_PROTO_COMMAND_ACK_LENGTH;
-    case PMA_PROTO_PARAM_RESP_FRAME_ID: return PMA_PROTO_PARAM_RESP_LENGTH;
-    case PMA_PROTO_HEARTBEAT_FRAME_ID: return PMA_PROTO_HEARTBEAT_LENGTH;
-    case PMA_PROTO_TELEM_A_FRAME_ID: return PMA_PROTO_TELEM_A_LENGTH;
-    case PMA_PROTO_TELEM_B_FRAME_ID: return PMA_PROTO_TELEM_B_LENGTH;
-    case PMA_PROTO_TELEM_C_FRAME_ID: return PMA_PROTO_TELEM_C_LENGTH;
-    case PMA_PROTO_TELEM_D_FRAME_ID: return PMA_PROTO_TELEM_D_LENGTH;
-    case PMA_PROTO_TELEM_E_FRAME_ID: return PMA_PROTO_TELEM_E_LENGTH;
+#define PMA_FUZZ_TX_LENGTH(name, id, length) \
+    case (id): return (length);
+        PMA_PROTO_PMA_TX_MESSAGES(PMA_FUZZ_TX_LENGTH)
+#undef PMA_FUZZ_TX_LENGTH
     default: return 0xFFu; /* not a message this node sends */
     }
 }
@@ -338,6 +336,13 @@ static void drain(void)
             CHECK(pma_proto_plant_actuator_unpack(&a, f.data, f.dlc) == 0);
             if (w.tx.act_kept < 8u) w.tx.act[w.tx.act_kept++] = a;
             ++w.tx.actuator;
+            break;
+        }
+        case PMA_PROTO_DEVICE_INFO_FRAME_ID: {
+            struct pma_proto_device_info_t di;
+            CHECK(pma_proto_device_info_unpack(&di, f.data, f.dlc) == 0);
+            CHECK(di.page <= 4u); /* the DBC's pages 0 to 4 */
+            ++w.tx.info;
             break;
         }
         default:
@@ -660,6 +665,22 @@ static void deliver(const pma_can_frame_t *f)
     }
     if (ours && base == PMA_PROTO_PARAM_REQ_FRAME_ID) {
         check_param_req(&s, f);
+        check_always();
+        return;
+    }
+    const bool info_req = valid && (f->id == PMA_PROTO_DEVICE_INFO_REQ_ALL_FRAME_ID ||
+                                    (ours && base == PMA_PROTO_DEVICE_INFO_REQ_FRAME_ID));
+    if (info_req) {
+        /* the identity: DEVICE_INFO pages only (at most one of each, fewer when the TX
+         * queue is full), nothing else changes; another length is dropped and counted */
+        CHECK(w.tx.total == w.tx.info);
+        CHECK(w.tx.info <= PMA_PROTO_DEVICE_INFO_PAGE_UID_HIGH_CHOICE + 1u);
+        CHECK(a->state == s.state && a->fault == s.fault);
+        CHECK(params_diff(&s.params, &a->params, NULL) == 0);
+        if (f->dlc != PMA_PROTO_DEVICE_INFO_REQ_LENGTH) {
+            CHECK(w.tx.info == 0);
+            CHECK(a->counters.frames_bad == s.counters.frames_bad + 1u);
+        }
         check_always();
         return;
     }
