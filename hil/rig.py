@@ -267,8 +267,9 @@ class Rig:
         self._c_f0, self._c_f1, self._c_fw2 = m.f0_n, m.f1_n_per_kpa, m.f_clip_width_n ** 2
         self._c_kb = m.k_break_kpa
         self._c_kw = m.k_blend_kpa
-        self._c_klo = (m.k0_low_n_per_mm, m.k1_low_n_per_mm_kpa)
-        self._c_khi = (m.k0_high_n_per_mm, m.k1_high_n_per_mm_kpa)
+        ks = m.stiffness_scale
+        self._c_klo = (ks * m.k0_low_n_per_mm, ks * m.k1_low_n_per_mm_kpa)
+        self._c_khi = (ks * m.k0_high_n_per_mm, ks * m.k1_high_n_per_mm_kpa)
         self._c_bmid = 0.5 * (m.b_contract_ns_per_mm + m.b_relax_ns_per_mm)
         self._c_bhalf = 0.5 * (m.b_contract_ns_per_mm - m.b_relax_ns_per_mm)
         self._c_bv = m.b_blend_mm_s
@@ -463,7 +464,7 @@ class Rig:
         u = (p_kpa - m.k_break_kpa) / m.k_blend_kpa
         k_lo = m.k0_low_n_per_mm - m.k1_low_n_per_mm_kpa * p_kpa
         k_hi = m.k0_high_n_per_mm - m.k1_high_n_per_mm_kpa * p_kpa
-        return k_lo + (k_hi - k_lo) * 0.5 * (1.0 + u / math.sqrt(u * u + 1.0))
+        return m.stiffness_scale * (k_lo + (k_hi - k_lo) * 0.5 * (1.0 + u / math.sqrt(u * u + 1.0)))
 
     def _b_of_v(self, v_mm_s: float) -> float:
         """Damper B [N s/mm]: contracting (v > 0) or relaxing (v < 0)."""

@@ -149,6 +149,9 @@ class MuscleParams:
     k1_low_n_per_mm_kpa: float = _CAL["k1_low_n_per_mm_kpa"]
     k0_high_n_per_mm: float = _CAL["k0_high_n_per_mm"]
     k1_high_n_per_mm_kpa: float = _CAL["k1_high_n_per_mm_kpa"]
+    # A rig variant: the spring K(P) scaled by this factor (another muscle of the same type,
+    # another length; hil/scenarios/variants). 1: the calibrated muscle.
+    stiffness_scale: float = 1.0
     # Damper: contracting (xs' > 0) and relaxing (xs' < 0), blended smoothly over
     # +-b_blend_mm_s so that the right-hand side stays smooth (numerics only).
     b_contract_ns_per_mm: float = _CAL["b_contract_ns_per_mm"]
@@ -348,6 +351,7 @@ class RigParams:
         m, ld, r, s = self.muscle, self.load, self.regulator, self.sensor
         checks = [
             (ld.mass_kg > 0, "load.mass_kg must be > 0"),
+            (m.stiffness_scale > 0, "muscle.stiffness_scale must be > 0"),
             (m.length_mm > 0, "muscle.length_mm must be > 0"),
             (m.b_contract_ns_per_mm > 0 and m.b_relax_ns_per_mm > 0, "damping must be > 0"),
             (m.b_blend_mm_s > 0 and m.f_clip_width_n > 0 and m.k_blend_kpa > 0, "smoothing widths must be > 0"),

@@ -147,6 +147,9 @@ def summarise(sc: Scenario, lanes: list[LaneResult], *, quick: bool, duration_s:
         # (no hysteresis, no friction, the initial load): a lower bound of what the muscle
         # cannot reach; with strong hysteresis x may bottom out short of it all the same
         info["reference_unreachable_virgin_curve_samples"] = int((~ok).sum())
+        # the PPC's guarantee monitor, from TELEM_E's CtrlFlags (docs/controllers.md)
+        info["guarantee_lost_at_s"] = first_flag_time(telem, CTRL_FLAG_GUARANTEE_LOST)
+        info["fallback_at_s"] = first_flag_time(telem, CTRL_FLAG_FALLBACK)
         summary["rmste"][label] = m.rmste_cm
         summary["max_abs_error_after_tu"][label] = m.max_abs_error_after_tu_cm
         summary["constraint_violations"][label] = m.constraint_violations
@@ -164,6 +167,20 @@ def summarise(sc: Scenario, lanes: list[LaneResult], *, quick: bool, duration_s:
             np.savez_compressed(out / "signals.npz", **arrays)  # type: ignore[arg-type]
         (out / "summary.json").write_text(json.dumps(jsonable(summary), indent=2) + "\n")
     return summary
+
+
+# Bits of TELEM_E CtrlFlags set by the application above the control laws' own flags
+# (PMA_CTRL_FLAG_* in firmware/app/controller.h; hil/tests/test_summary_flags.py checks them).
+CTRL_FLAG_GUARANTEE_LOST = 0x4000
+CTRL_FLAG_FALLBACK = 0x8000
+
+
+def first_flag_time(telem: dict[str, np.ndarray], bit: int) -> float | None:
+    """Control time [s] of the first telemetry sample with `bit` in CtrlFlags; None if none."""
+    if "t_s" not in telem or "ctrl_flags" not in telem or not len(telem["ctrl_flags"]):
+        return None
+    hit = (telem["ctrl_flags"].astype(np.int64) & bit) != 0
+    return float(telem["t_s"][np.argmax(hit)]) if hit.any() else None
 
 
 def reference_check(telem: dict[str, np.ndarray], steps: np.ndarray, xr_fn: Callable[[np.ndarray], np.ndarray],

@@ -176,6 +176,8 @@ done
 stage "pytest (no CAN)" .venv/bin/python -m pytest -q "${NO_CAN_TESTS[@]}"
 stage "HIL acceptance offline (the paper's Cases 1-3, MFAC, PID, load change, constraint, faults; libpma_offline.so)" \
   .venv/bin/python -m pytest -q hil/tests/test_acceptance.py
+stage "rig variants offline (Case 3 on rigs the set was not tuned on: no fault, the guarantee or its flagged loss, about MFAC's error)" \
+  .venv/bin/python -m pytest -q hil/tests/test_rig_variants.py
 stage "hil/with-vcan" bash hil/tests/test_with_vcan.sh
 stage "pmactl unit tests (python-can virtual bus, no CAN)" \
   .venv/bin/python -m pytest -q host/tests --ignore=host/tests/integration

@@ -293,7 +293,6 @@ static int cmd_start(pma_app_t *app)
     if (rc != PMA_OK) return rc;
     app->run_ticks = 0;
     app->ticks_since_host_heartbeat = 0;
-    app->barrier_run = 0;
     app->telem_count = 0;
     app->state = PMA_STATE_RUNNING;
     return PMA_OK;
@@ -453,7 +452,6 @@ void pma_app_tick(pma_app_t *app, uint32_t late_ticks)
             ctrl_error = (uint8_t)(pma_ctrl_step(&app->ctrl, t_s, app->x_cm,
                                                  app->params.ctrl_openloop_u, &u) != PMA_OK);
             app->u = u;
-            app->barrier_run = app->ctrl.out.barrier ? app->barrier_run + 1u : 0u;
             ++app->run_ticks;
         }
     } else {
@@ -482,7 +480,8 @@ void pma_app_tick(pma_app_t *app, uint32_t late_ticks)
         .ticks_since_host_heartbeat = app->ticks_since_host_heartbeat,
         .controller_error = ctrl_error,
         .u = app->u,
-        .barrier_run = app->barrier_run,
+        /* the law's clamp run; none once MFAC is in charge (the run that hands over) */
+        .barrier_run = app->ctrl.fallback_active ? 0u : app->ctrl.barrier_run,
     };
     const pma_fault_t f = pma_supervisor_check(&lim, &in);
     if (f != PMA_FAULT_NONE) pma_app_raise_fault(app, f); /* safe output below, this tick */

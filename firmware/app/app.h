@@ -80,6 +80,8 @@ typedef enum pma_param_op {
 #define PMA_HB_SENSOR_VALID    0x0040u
 #define PMA_HB_REF_ACTIVE      0x0080u
 #define PMA_HB_SAVE_FAILED     0x0100u /* the last SAVE failed */
+#define PMA_HB_GUARANTEE_LOST  0x0200u /* PPC: the guarantee was lost since START (controller.h) */
+#define PMA_HB_FALLBACK        0x0400u /* PPC: MFAC is in charge (ppc.fallback 1) */
 
 /* PLANT_ACTUATOR Sample signal. */
 #define PMA_SAMPLE_NEW      0u
@@ -137,6 +139,9 @@ enum {
     PMA_STATUS_FRAMES_BAD = 5,     /* this node's frames with a wrong length or undecodable */
     PMA_STATUS_TICKS = 6,          /* control ticks since start-up (mod 2^32) */
     PMA_STATUS_FRAMES_RX = 7,      /* frames handled since start-up (mod 2^32) */
+    PMA_STATUS_GUARANTEE_LOST_TICKS = 8, /* PPC: lost ticks since START (saturates at 2^32-1) */
+    PMA_STATUS_GUARANTEE_LOST_AT_MS = 9, /* PPC: control time of the first, 0xFFFFFFFF: none */
+    PMA_STATUS_BARRIER_BREACHES = 10,    /* PPC: ticks with a barrier clamp since START (saturates) */
 };
 
 /* While bus-off, recovery is requested at most this often (a request may
@@ -200,7 +205,6 @@ typedef struct pma_app {
     /* control */
     pma_ctrl_t ctrl;
     float u;
-    uint32_t barrier_run;
     uint32_t telem_count;
     /* output */
     float p_kpa;

@@ -79,6 +79,8 @@ void pma_app_send_heartbeat(pma_app_t *app)
     if (app->params_changed) flags |= PMA_HB_PARAMS_CHANGED;
     if (app->params_default) flags |= PMA_HB_PARAMS_DEFAULT;
     if (app->save_failed) flags |= PMA_HB_SAVE_FAILED;
+    if (app->ctrl.lost) flags |= PMA_HB_GUARANTEE_LOST;
+    if (app->ctrl.fallback_active) flags |= PMA_HB_FALLBACK;
     if (app->sensor_status == PMA_OK &&
         !(pma_app_bridge_on(app) &&
           app->ticks_since_sample >= app->params.safety_sensor_timeout_ticks)) {
@@ -141,7 +143,7 @@ void pma_app_send_telemetry(pma_app_t *app)
     if (mask & 0x10u) {
         struct pma_proto_telem_e_t m = {
             .pressure_kpa = app->p_kpa, .ctrl_flags = (uint16_t)o->flags,
-            .breaches = (uint16_t)(app->ctrl.breaches > 0xFFFFu ? 0xFFFFu : app->ctrl.breaches),
+            .breaches = (uint16_t)(app->ctrl.breaches & 0xFFFFu), /* mod 2^16 (DBC) */
         };
         (void)pma_proto_telem_e_pack(d, &m, sizeof d);
         (void)send(app, PMA_PROTO_TELEM_E_FRAME_ID, PMA_PROTO_TELEM_E_LENGTH, d);
@@ -248,6 +250,11 @@ static int status_value(const pma_app_t *app, uint16_t id, uint32_t *out)
     case PMA_STATUS_FRAMES_BAD: *out = app->counters.frames_bad; return PMA_OK;
     case PMA_STATUS_TICKS: *out = (uint32_t)app->ticks; return PMA_OK;
     case PMA_STATUS_FRAMES_RX: *out = app->counters.frames_rx; return PMA_OK;
+    case PMA_STATUS_GUARANTEE_LOST_TICKS: *out = app->ctrl.lost_ticks; return PMA_OK;
+    case PMA_STATUS_GUARANTEE_LOST_AT_MS:
+        *out = app->ctrl.lost ? (uint32_t)lroundf(app->ctrl.lost_at_s * 1000.0f) : UINT32_MAX;
+        return PMA_OK;
+    case PMA_STATUS_BARRIER_BREACHES: *out = app->ctrl.breaches; return PMA_OK;
     default: *out = 0; return PMA_ERR_UNKNOWN_ID;
     }
 }

@@ -64,7 +64,18 @@ int pma_ctrl_start(pma_ctrl_t *s, const pma_params_t *p, float period_s)
         c.band_enabled = (uint8_t)(p->ppc_band_check != 0);
         c.k_low_cm = p->safety_x_min_cm;
         c.k_high_cm = p->safety_x_max_cm;
-        return pma_ppc_init_f32(&s->c.ppc, &c);
+        CHECK(pma_ppc_init_f32(&s->c.ppc, &c));
+        s->w1_cm = c.w1_cm;
+        s->t_u_s = c.t_u_s;
+        s->barrier_ticks = p->safety_barrier_ticks;
+        s->fallback_mode = (uint8_t)(p->ppc_fallback != 0);
+        if (!s->fallback_mode) return PMA_OK;
+        pma_mfac_config_t m = {
+            .eta = p->mfac_eta, .mu = p->mfac_mu, .rho = p->mfac_rho, .lambda = p->mfac_lambda,
+            .eps = p->mfac_eps, .phi1 = p->mfac_phi1, .u_min = p->ctrl_u_min,
+            .u_max = p->ctrl_u_max, .u_init = c.ff_init,
+        };
+        return pma_mfac_init_f32(&s->shadow, &m);
     }
     case PMA_CTRL_MODE_MFAC: {
         pma_mfac_config_t c = {
@@ -106,14 +117,39 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
     float out = 0.0f;
     switch (s->mode) {
     case PMA_CTRL_MODE_PPC: {
-        /* the options (controller.h) choose the law's inputs */
-        const float x_law_cm = s->ppc_obs_pos ? s->vel.xh : x_cm;
-        const float v_law_cm_s = s->ppc_ref_vel ? o->v_cm_s - o->xr_dot_cm_s : o->v_cm_s;
-        CHECK(pma_ppc_step_f32(&s->c.ppc, t_s, x_law_cm, v_law_cm_s, o->xr_cm, &out));
-        o->flags = s->c.ppc.out.flags;
-        o->internal1 = s->c.ppc.out.lambda1_cm;
-        o->internal2 = s->c.ppc.out.lambda2_cm_s;
-        o->barrier = (uint8_t)((o->flags & (PMA_PPC_FLAG_BARRIER1 | PMA_PPC_FLAG_BARRIER2)) != 0);
+        /* the fallback MFAC's reference of the next sample, as in mode MFAC */
+        float xr_next;
+        if (pma_ref_value_f32(&s->ref_cfg, t_s + s->period_s, &xr_next, NULL) != PMA_OK) {
+            xr_next = o->xr_cm;
+        }
+        float u_mfac = 0.0f;
+        if (s->fallback_mode) CHECK(pma_mfac_step_f32(&s->shadow, x_cm, xr_next, &u_mfac));
+        if (!s->fallback_active) {
+            /* the options (controller.h) choose the law's inputs */
+            const float x_law_cm = s->ppc_obs_pos ? s->vel.xh : x_cm;
+            const float v_law_cm_s = s->ppc_ref_vel ? o->v_cm_s - o->xr_dot_cm_s : o->v_cm_s;
+            CHECK(pma_ppc_step_f32(&s->c.ppc, t_s, x_law_cm, v_law_cm_s, o->xr_cm, &out));
+            o->flags = s->c.ppc.out.flags;
+            o->internal1 = s->c.ppc.out.lambda1_cm;
+            o->internal2 = s->c.ppc.out.lambda2_cm_s;
+            o->barrier = (uint8_t)((o->flags & (PMA_PPC_FLAG_BARRIER1 | PMA_PPC_FLAG_BARRIER2)) != 0);
+        }
+        s->barrier_run = o->barrier ? s->barrier_run + 1u : 0u;
+        const int clamp_run = s->barrier_ticks != 0 && s->barrier_run >= s->barrier_ticks;
+        if ((t_s >= s->t_u_s && fabsf(o->e_cm) >= s->w1_cm) || clamp_run) {
+            if (!s->lost) s->lost_at_s = t_s;
+            s->lost = 1;
+            if (s->lost_ticks != UINT32_MAX) ++s->lost_ticks;
+            if (s->fallback_mode) s->fallback_active = 1;
+        }
+        if (s->fallback_active) {
+            out = u_mfac;
+            o->flags = s->shadow.flags | PMA_CTRL_FLAG_FALLBACK;
+            o->internal1 = s->shadow.phi;   /* TELEM_D as in mode MFAC */
+            o->internal2 = s->shadow.u1;
+        }
+        if (s->lost) o->flags |= PMA_CTRL_FLAG_GUARANTEE_LOST;
+        if (s->fallback_mode) s->shadow.u1 = out; /* MFAC learns from the input applied */
         break;
     }
     case PMA_CTRL_MODE_MFAC: {

@@ -15,6 +15,11 @@
 #include "pma/ref.h"
 #include "pma/velest.h"
 
+/* Bits of pma_ctrl_out_t.flags above the control laws' own PMA_*_FLAG_* (bits 0-5); they
+ * travel in TELEM_E CtrlFlags. */
+#define PMA_CTRL_FLAG_GUARANTEE_LOST 0x4000u /* PPC: the guarantee was lost since START (latched) */
+#define PMA_CTRL_FLAG_FALLBACK       0x8000u /* PPC: MFAC is in charge (ppc.fallback 1) */
+
 typedef struct pma_ctrl_out {
     float t_s;              /* control time since START */
     float xr_cm, e_cm;      /* reference and e = x - xr (x the raw sample) */
@@ -22,7 +27,7 @@ typedef struct pma_ctrl_out {
     float v_cm_s;           /* velocity estimate */
     float u;                /* output, within ctrl.u_min..u_max [input unit] */
     float internal1, internal2; /* TELEM_D: PPC lambda1 [cm], lambda2 [cm/s]; MFAC phi, u(k-1); PID I, D */
-    uint32_t flags;         /* the controller's PMA_*_FLAG_* of this step */
+    uint32_t flags;         /* the controller's PMA_*_FLAG_* of this step, and PMA_CTRL_FLAG_* */
     uint8_t barrier;        /* PPC: a barrier clamp this step */
 } pma_ctrl_out_t;
 
@@ -40,6 +45,16 @@ typedef struct pma_ctrl {
     uint8_t ppc_ref_vel;    /* option ppc.ref_vel: the law damps x' - x_r' */
     uint8_t ppc_obs_pos;    /* option ppc.obs_pos: the law's x is the observer's x_hat */
     uint32_t breaches;      /* steps with a barrier clamp since START */
+    /* PPC's guarantee monitor and fallback (docs/controllers.md, "When the guarantee is lost") */
+    pma_mfac_f32_t shadow;  /* MFAC, learning from the applied input while the PPC is in charge */
+    uint8_t fallback_mode;  /* ppc.fallback: 0 none, 1 MFAC */
+    uint8_t lost;           /* the guarantee was lost since START (latched) */
+    uint8_t fallback_active;/* MFAC is in charge (from the first lost tick until STOP) */
+    float w1_cm, t_u_s;     /* the monitor's bound and the time it starts [cm, s] */
+    uint32_t barrier_ticks; /* safety.barrier_ticks: a clamp run this long is lost (0: never) */
+    uint32_t barrier_run;   /* consecutive ticks with a barrier clamp */
+    uint32_t lost_ticks;    /* lost ticks since START (saturates at 2^32-1) */
+    float lost_at_s;        /* control time of the first of them [s] */
     float stream_margin_cm; /* STREAM targets keep this far inside the band (PPC: w1) */
     pma_ctrl_out_t out;
 } pma_ctrl_t;
@@ -66,6 +81,15 @@ int pma_ctrl_start(pma_ctrl_t *s, const pma_params_t *p, float period_s);
 /* One step at control time t_s with position x_cm; openloop_u is the live
  * ctrl.openloop_u. *u receives the output (0 on error). */
 int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float *u);
+
+/* The PPC's guarantee monitor (mode PPC; t the control time since START, e = x - x_r with
+ * the raw sample): a tick with t >= t_u and |e| >= w1, or (at any t) the last of
+ * safety.barrier_ticks consecutive ticks with a barrier clamp of the law (the run that faults
+ * BARRIER without the fallback) and every clamped tick after it, is a lost tick. The first one latches `lost` and records `lost_at_s`; every one counts in
+ * `lost_ticks`. With ppc.fallback 1 the first lost tick hands the loop to MFAC (`shadow`, the
+ * mfac.* gains), which has run beside the law from START with its u(k-1) set to the input
+ * actually applied (its pseudo partial derivative phi learns from the rig's real response), so
+ * the hand-over is bumpless; the law is not stepped again until STOP. */
 
 /* STREAM reference: a new target, accepted when finite and strictly inside
  * the constraint band (x_min + m, x_max - m), m = w1 for PPC with the band

@@ -8,7 +8,8 @@
  * Runs in ADC mode and, for the tables, also in plant-bridge mode. */
 #include "app_test.h"
 
-_Static_assert(sizeof(pma_app_t) <= 1024u, "pma_app_t must stay small (Cortex-M0: 16 KB RAM)");
+/* 1,072 bytes with the PPC's fallback MFAC beside the law (controller.h) */
+_Static_assert(sizeof(pma_app_t) <= 1152u, "pma_app_t must stay small (Cortex-M0: 16 KB RAM)");
 
 typedef enum { S_IDLE, S_ARMED, S_RUNNING, S_FAULT, S_COUNT } setup_state_t;
 

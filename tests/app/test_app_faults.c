@@ -319,11 +319,21 @@ static void test_non_finite_output(void)
 
 /* ------------------------------------------------------------- barrier -- */
 
-/* PPC: the position held far from the reference drives lambda1 into its
- * barrier; safety.barrier_ticks consecutive clamped ticks fault. */
+static uint32_t status_value(uint16_t id)
+{
+    const presp_t r = param_req(PMA_PARAM_OP_GET_STATUS, PMA_PARAM_U32, id, vu(0));
+    assert_status(r.result, PMA_OK);
+    return r.v.u32;
+}
+
+/* PPC without the fallback (ppc.fallback 0, the BARRIER fault asked for): the
+ * position held far from the reference drives lambda1 into its barrier;
+ * safety.barrier_ticks consecutive clamped ticks fault. */
 static void test_barrier(void)
 {
-    to_running(0);
+    to_armed(0);
+    set_u32(PMA_PARAM_PPC_FALLBACK, 0);
+    command_ok(PMA_CMD_START, 0, PMA_OK);
     pma_fake_adc_set(counts_at(-0.2f)); /* e = 1.3 cm >> w1 = 0.2 cm, inside the band */
     uint32_t run = 0, t = 0;
     while (app.state == PMA_STATE_RUNNING && t < 3000) {
@@ -363,6 +373,68 @@ static void test_barrier(void)
     }
     assert_state(app.state, PMA_STATE_RUNNING);
     TEST_ASSERT_GREATER_THAN(500u, longest); /* far beyond the 100 that trip when enabled */
+}
+
+/* The same task with the default ppc.fallback 1: no fault; the 100th consecutive clamped tick
+ * (safety.barrier_ticks) loses the guarantee and hands the loop to MFAC, bumplessly (the
+ * output of that tick is MFAC's from the input applied before); the loss is flagged in the
+ * heartbeat and in TELEM_E, counted (GET_STATUS 8, and every tick after t_u with |e| >= w1),
+ * and its time kept (GET_STATUS 9); the supervisor's limits still apply. */
+static void test_barrier_hands_over_to_mfac(void)
+{
+    to_running(0);
+    TEST_ASSERT_EQUAL_HEX32(UINT32_MAX, status_value(PMA_STATUS_GUARANTEE_LOST_AT_MS));
+    TEST_ASSERT_EQUAL_INT(0u, status_value(PMA_STATUS_GUARANTEE_LOST_TICKS));
+    pma_fake_adc_set(counts_at(-0.2f)); /* e = 1.3 cm >> w1 = 0.2 cm, inside the band */
+    uint32_t run = 0, t = 0, handover_tick = 0, lost = 0;
+    float handover_t_s = 0.0f;
+    const float t_u_s = app.params.ppc_t_u_s;
+    while (t < 3000) {
+        if (t % 100 == 0) send_host_heartbeat((uint8_t)t);
+        const float u_before = app.u;
+        step();
+        ++t;
+        assert_state(app.state, PMA_STATE_RUNNING);
+        const pma_ctrl_out_t *o = &app.ctrl.out;
+        if (handover_tick == 0) {
+            run = o->barrier ? run + 1u : 0u;
+            if (run < 100u) {
+                TEST_ASSERT_FALSE(app.ctrl.fallback_active);
+                TEST_ASSERT_FALSE(o->flags & PMA_CTRL_FLAG_FALLBACK);
+                continue;
+            }
+            handover_tick = t;
+            handover_t_s = o->t_s;
+            TEST_ASSERT_TRUE(app.ctrl.lost && app.ctrl.fallback_active);
+            /* MFAC's first step continues from the input the law applied */
+            TEST_ASSERT_FLOAT_WITHIN(0.0f, u_before, app.ctrl.shadow.u2);
+        }
+        TEST_ASSERT_TRUE(o->flags & PMA_CTRL_FLAG_FALLBACK);
+        TEST_ASSERT_TRUE(o->flags & PMA_CTRL_FLAG_GUARANTEE_LOST);
+        TEST_ASSERT_TRUE(app.u >= app.params.ctrl_u_min && app.u <= app.params.ctrl_u_max);
+        if (o->t_s >= t_u_s && fabsf(o->e_cm) >= app.params.ppc_w1_cm) ++lost;
+    }
+    TEST_ASSERT_GREATER_THAN(0u, handover_tick);
+    TEST_ASSERT_GREATER_THAN(0u, lost);
+    /* the run's last tick counts, then every tick after t_u outside w1 */
+    TEST_ASSERT_EQUAL_INT(1u + lost, status_value(PMA_STATUS_GUARANTEE_LOST_TICKS));
+    /* the control time of the hand-over tick, in ms */
+    TEST_ASSERT_EQUAL_INT(lroundf(handover_t_s * 1000.0f), status_value(PMA_STATUS_GUARANTEE_LOST_AT_MS));
+    TEST_ASSERT_EQUAL_INT(app.ctrl.breaches, status_value(PMA_STATUS_BARRIER_BREACHES));
+    const struct pma_proto_heartbeat_t h = next_heartbeat();
+    TEST_ASSERT_TRUE(h.flags & PMA_HB_GUARANTEE_LOST);
+    TEST_ASSERT_TRUE(h.flags & PMA_HB_FALLBACK);
+    TEST_ASSERT_EQUAL_INT(PMA_FAULT_NONE, h.fault_code);
+    /* the safety limits stay: the position leaves the band -> POSITION_LIMIT */
+    pma_fake_adc_set(counts_at(1.0f));
+    step();
+    assert_fault(app.fault, PMA_FAULT_POSITION_LIMIT);
+    /* the next START clears the monitor */
+    command_ok(PMA_CMD_CLEAR_FAULTS, 0, PMA_OK);
+    pma_fake_adc_set(counts_at(-1.5f));
+    to_running(0);
+    TEST_ASSERT_FALSE(app.ctrl.lost || app.ctrl.fallback_active);
+    TEST_ASSERT_EQUAL_HEX32(UINT32_MAX, status_value(PMA_STATUS_GUARANTEE_LOST_AT_MS));
 }
 
 /* ---------------------------------------------------------------- DAC -- */
@@ -634,6 +706,7 @@ int main(void)
     RUN_TEST(test_host_heartbeat_lost);
     RUN_TEST(test_non_finite_output);
     RUN_TEST(test_barrier);
+    RUN_TEST(test_barrier_hands_over_to_mfac);
     RUN_TEST(test_dac_failure);
     RUN_TEST(test_bus_off);
     RUN_TEST(test_bridge_fault_frame);

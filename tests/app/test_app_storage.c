@@ -8,7 +8,7 @@
  * RUNNING; LOAD restores the saved set; the heartbeat flags PARAMS_CHANGED,
  * PARAMS_DEFAULT, SAVE_FAILED; stored records that are corrupt, of another
  * blob version or holding a value out of range. */
-#define T_NVM_BPS 27u /* 432-byte slots: a 402-byte blob + 20 bytes of record */
+#define T_NVM_BPS 28u /* 448-byte slots: a 414-byte blob + 20 bytes of record */
 #include "app_test.h"
 
 #include "pstore.h"

@@ -693,7 +693,7 @@ struct pma_proto_heartbeat_t {
     uint8_t fault_code;
 
     /**
-     * Bit 0 output active, 1 plant bridge, 2 lockstep, 3 parameters changed since load or save, 4 parameters are the defaults (storage held no record), 5 CAN error-passive or bus-off, 6 sensor valid, 7 RUNNING (a reference is active), 8 the last SAVE failed.
+     * Bit 0 output active, 1 plant bridge, 2 lockstep, 3 parameters changed since load or save, 4 parameters are the defaults (storage held no record), 5 CAN error-passive or bus-off, 6 sensor valid, 7 RUNNING (a reference is active), 8 the last SAVE failed, 9 PPC: the guarantee was lost since START (after t_u a tick with |e| >= w1 or a barrier clamp; GET_STATUS 8 and 9 give the count and the time), 10 PPC: MFAC is in charge (ppc.fallback 1, from the first lost tick until STOP).
      *
      * Range: 0..65535 (0..65535 -)
      * Scale: 1
@@ -827,7 +827,7 @@ struct pma_proto_telem_d_t {
 /**
  * Signals in message TELEM_E.
  *
- * Telemetry 5 of 5: pressure command, controller flags of the step, barrier clamps since START (saturated).
+ * Telemetry 5 of 5: pressure command, controller flags of the step, barrier clamps since START (mod 65536: it wraps; GET_STATUS 10 gives the full count).
  *
  * All signal values are as on the CAN bus.
  */
@@ -840,6 +840,8 @@ struct pma_proto_telem_e_t {
     float pressure_kpa;
 
     /**
+     * The control law's flags of the step (PPC: bit 0 lambda1 barrier clamp, 1 lambda2 barrier clamp, 2 output at u_max, 3 at u_min, 4 and 5 beyond the soft barrier; MFAC: 0 phi reset, 2 and 3 as PPC; PID: 2 and 3 as PPC), and bit 14 PPC: the guarantee was lost since START, bit 15 PPC: MFAC is in charge (its flags then fill bits 0-3).
+     *
      * Range: 0..65535 (0..65535 -)
      * Scale: 1
      * Offset: 0
@@ -847,6 +849,8 @@ struct pma_proto_telem_e_t {
     uint16_t ctrl_flags;
 
     /**
+     * Ticks with a barrier clamp since START, mod 65536 (a client unwraps it; GET_STATUS 10 is the 32-bit count).
+     *
      * Range: 0..65535 (0..65535 -)
      * Scale: 1
      * Offset: 0

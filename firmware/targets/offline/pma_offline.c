@@ -303,7 +303,7 @@ int pma_offline_tick(uint16_t raw_counts, pma_offline_tick_t *out)
     out->x_cm = app.x_cm;
     out->u = app.u;
     out->p_kpa = app.p_kpa;
-    out->barrier_run = app.barrier_run;
+    out->barrier_run = app.ctrl.barrier_run;
     return actuator ? PMA_OK : PMA_ERR_IO;
 }
 
