@@ -157,12 +157,13 @@ def test_board_mode_drives_a_real_time_node(tmp_path):
     guarantee). Hence the node's timing limits are set wide: 50 Hz (the lowest tick rate),
     a tick may be served up to 20 s late, 200 s without a sample, 60 s without a host
     heartbeat, and no BARRIER fault (stale samples push the law onto its barrier; a CI
-    run on a loaded machine faulted here at 200 Hz)."""
+    run on a loaded machine faulted here at 200 Hz), nor a hand-over to MFAC (ppc.fallback 0:
+    the law's path is what this test follows)."""
     from hil.fw_process import FirmwareProcess
     sc = scn.load("case1")
     sc.controllers = [c for c in sc.controllers if c.label == "ppc"]
     sc.params.update({"sys.tick_hz": 50, "safety.sensor_timeout_ticks": 10000, "safety.host_timeout_ms": 60000,
-                      "safety.max_late_ticks": 1000, "safety.barrier_ticks": 0})
+                      "safety.max_late_ticks": 1000, "safety.barrier_ticks": 0, "ppc.fallback": 0})
     node = 5
     fw = FirmwareProcess(tmp_path, ["--node", str(node), "--watchdog-ms", "10000"]).start()
     try:

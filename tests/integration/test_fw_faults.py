@@ -245,6 +245,7 @@ def test_barrier_fault_after_barrier_ticks_consecutive_clamps(firmware, bus) -> 
     node.set("ref.kind", 0)
     node.set("ref.offset_cm", -1.5)
     node.set("safety.barrier_ticks", barrier_ticks)
+    node.set("ppc.fallback", 0)                        # the BARRIER fault asked for (no hand-over)
     node.set("ppc.t_u_s", 0.2)                         # alpha rises 10x faster: clamps from ~20 ticks
     node.set("telem.decimation", 1)
     node.set("telem.mask", 0x10)                       # TELEM_E only
