@@ -10,14 +10,23 @@
 #   bash tools/run-demo.sh --quick    # the first 30 s (CI)
 #   OUT=DIR bash tools/run-demo.sh    # results in DIR (default build/hil/case3)
 #
+#   bash tools/run-demo.sh --no-setup # skip set-up and build (the caller did both: the CI,
+#                                     # whose other lane uses the same build meanwhile)
 # Any other arguments go to `python -m hil run` (e.g. --controller ppc-paper).
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$ROOT"
-bash tools/setup.sh
-cmake --preset host-ubsan >/dev/null
-cmake --build --preset host-ubsan
+setup=1
+args=()
+for a in "$@"; do
+  if [[ $a == --no-setup ]]; then setup=0; else args+=("$a"); fi
+done
+if ((setup)); then
+  bash tools/setup.sh
+  cmake --preset host-ubsan >/dev/null
+  cmake --build --preset host-ubsan
+fi
 out=${OUT:-build/hil/case3}
 ctrls=(--controller ppc --controller mfac)
-for a in "$@"; do [[ $a == --controller ]] && ctrls=(); done
-exec .venv/bin/python -m hil run case3 --out "$out" "${ctrls[@]}" "$@"
+for a in "${args[@]}"; do [[ $a == --controller ]] && ctrls=(); done
+exec .venv/bin/python -m hil run case3 --out "$out" "${ctrls[@]}" "${args[@]}"

@@ -143,7 +143,7 @@ vcan_integration() {
 # the tuning session of docs/tuning.md; the lockstep benchmark (printed, never asserted).
 vcan_hil() {
   echo "-- the README's main job, quick variant (Case 3, first 30 s, PPC vs MFAC)"
-  env OUT=build/hil/ci-quick bash tools/run-demo.sh --quick --no-progress
+  env OUT=build/hil/ci-quick bash tools/run-demo.sh --no-setup --quick --no-progress
   echo "-- HIL over vcan: bus log, identity, clean stops, --board; offline == over CAN"
   PMA_OFFLINE_COMPARE_RUN=build/hil/ci-quick hil/with-vcan .venv/bin/python -m pytest -q \
     hil/tests/test_hil_acceptance.py hil/tests/test_offline_vs_hil.py
