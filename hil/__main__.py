@@ -89,7 +89,7 @@ def cmd_list(_: argparse.Namespace) -> int:
 
 def cmd_run(args: argparse.Namespace, argv: list[str]) -> int:
     from .report import print_summary, write_figures
-    from .runner import RunError, RunOptions, Runner
+    from .runner import RunError, Runner, RunOptions
     try:
         sc = scn.load(args.scenario)
     except scn.ScenarioError as e:
@@ -130,8 +130,8 @@ def cmd_run(args: argparse.Namespace, argv: list[str]) -> int:
     print(f"results: {out / 'summary.json'}, {out / 'signals.npz'}, {out / summary['bus_log']}")
     if summary["interrupted"]:
         return 130
-    for e in summary["errors"]:
-        print(f"hil: error: {e}", file=sys.stderr)
+    for err in summary["errors"]:
+        print(f"hil: error: {err}", file=sys.stderr)
     return 0 if summary["expect_met"] else 1
 
 

@@ -28,10 +28,10 @@ from typing import Any, Callable
 
 import can
 
-from .fw_process import FW_HOST, BUILD_HINT, FirmwareProcess
-from .runner import LOCKSTEP_WATCHDOG_MS, REPLY_TIMEOUT_S
+from .fw_process import BUILD_HINT, FW_HOST, FirmwareProcess
 from .rig import Rig
 from .rig_params import RigParams
+from .runner import LOCKSTEP_WATCHDOG_MS, REPLY_TIMEOUT_S
 from .scenario import parse, protocol
 
 NODE = 1
@@ -100,8 +100,9 @@ def measure(cfg: dict[str, Any], seconds: float, work: Path) -> dict[str, Any]:
                 data = sensor_def.encode({"Seq": state["seq"], "RawCounts": counts}, scaling=False)
                 r = exchange(bytes(data), log)
                 sig = act_def.decode(bytes(r.data), decode_choices=False, scaling=False)
+                assert isinstance(sig, dict)    # not a container message
                 if use_rig:
-                    rig.apply_dac(int(sig["DacCounts"]))
+                    rig.apply_dac(int(sig["DacCounts"]))  # type: ignore[arg-type]  # an integer signal
                     rig.step(1e-3)
             return step
 
@@ -136,7 +137,7 @@ def measure(cfg: dict[str, Any], seconds: float, work: Path) -> dict[str, Any]:
 
 
 def _runner_rate(cfg: dict[str, Any], seconds: float, work: Path) -> dict[str, float]:
-    from .runner import RunOptions, Runner
+    from .runner import Runner, RunOptions
     # a 1-lane HOLD run; its length in control time is set so that it lasts about `seconds`
     sc = parse({"name": "bench", "duration_s": max(1.0, seconds * 0.6), "rig": {"p0_kpa": 60.0, "substep_s": 2.5e-4},
                 "params": {"act.p0_kpa": 100.0, "act.polarity": -1, "act.p_max_kpa": 900.0, "ctrl.u_min": -800.0,

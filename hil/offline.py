@@ -49,7 +49,7 @@ REPO = Path(__file__).resolve().parents[1]
 LIB_PATH = Path(os.environ.get("PMA_OFFLINE_LIB",
                                REPO / "build/host-offline/firmware/targets/offline/libpma_offline.so"))
 BUILD_HINT = "cmake --preset host-offline && cmake --build --preset host-offline"
-API_VERSION = 1                 # PMA_OFFLINE_API_VERSION in pma_offline.h
+API_VERSION = 2                 # PMA_OFFLINE_API_VERSION in pma_offline.h
 HOST_HEARTBEAT_PERIOD_S = 0.1   # as the runner: every 100 ms of control time
 EXTRA_TICKS = 5                 # as the runner: ticks after the run, so a last-tick fault shows
 PMA_OK = 0
@@ -124,6 +124,11 @@ def _load(path: Path) -> ctypes.CDLL:
         "pma_offline_command": (i32, [u8, u8, ctypes.POINTER(u8)]),
         "pma_offline_host_heartbeat": (i32, [u8]),
         "pma_offline_tick": (i32, [u16, ctypes.POINTER(TickOut)]),
+        "pma_offline_host_queue": (None, [i32]),
+        "pma_offline_frame_in": (i32, [u16, u8, ctypes.POINTER(u8)]),
+        "pma_offline_loop": (i32, []),
+        "pma_offline_frame_out": (i32, [ctypes.POINTER(u16), ctypes.POINTER(u8), ctypes.POINTER(u8)]),
+        "pma_offline_host_dropped": (ctypes.c_uint32, []),
         "pma_offline_state": (i32, []),
         "pma_offline_fault": (i32, []),
         "pma_offline_ticks": (ctypes.c_uint64, []),

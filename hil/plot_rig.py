@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+from typing import Any
 
 import numpy as np
 
@@ -22,7 +23,7 @@ if __package__ in (None, ""):
     sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 from hil.rig import Rig, RigParams  # noqa: E402
-from hil.rig_params import SOURCES, calibrate_mas10  # noqa: E402
+from hil.rig_params import calibrate_mas10  # noqa: E402
 
 STEPS_KPA = (25, 50, 100, -50, -100)
 T_PRE, T_POST, DT = 0.1, 1.5, 0.001
@@ -189,8 +190,15 @@ def main() -> None:
     ax.set_ylabel("x [cm] (contraction -> negative)")
     ax.set_ylim(-3.2, 1.6)
     ax.set_xlim(0, 900)
-    sec = ax.secondary_yaxis("right", functions=(lambda x: (rig.x0_contraction_mm - 10 * x) / rig.params.muscle.length_mm * 100,
-                                                 lambda c: (rig.x0_contraction_mm - c * rig.params.muscle.length_mm / 100) / 10))
+    length_mm = rig.params.muscle.length_mm
+
+    def to_contraction(x: Any) -> Any:
+        return (rig.x0_contraction_mm - 10 * x) / length_mm * 100
+
+    def to_x(c: Any) -> Any:
+        return (rig.x0_contraction_mm - c * length_mm / 100) / 10
+
+    sec = ax.secondary_yaxis("right", functions=(to_contraction, to_x))
     sec.set_ylabel("contraction [% of 100 mm]")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="lower left")

@@ -517,10 +517,10 @@ class Rig:
         its stability region for the stiffest mode of the current parameters."""
         p = self.params
         m = p.muscle
-        f_max = self._f_pos(p.regulator.p_max_kpa)
         k_max = max(self._k_of_p(0.0), self._k_of_p(p.regulator.p_max_kpa))
         k_h = m.hyst_force_n * sum(w / dlt for w, dlt in zip(m.hyst_weights, m.hyst_delta_mm))
-        b_max = max(m.b_contract_ns_per_mm, m.b_relax_ns_per_mm) * (1.0 + abs(p.drift.b_per_k) * p.drift.temp_max_rise_k)
+        b_max = (max(m.b_contract_ns_per_mm, m.b_relax_ns_per_mm)
+                 * (1.0 + abs(p.drift.b_per_k) * p.drift.temp_max_rise_k))
         lam = 1000.0 * b_max / self._mass + math.sqrt(1000.0 * (k_max + k_h) / self._mass)
         lam += 1.0 / p.regulator.tau_s + (1.0 / p.sensor.tau_s if p.sensor.tau_s > 0 else 0.0)
         if m.hyst_force_n > 0:

@@ -106,7 +106,8 @@ def staircase_loop(params: RigParams, p_max_kpa: float, step_kpa: float, hold_s:
     """A quasi-static staircase p_min -> p_max -> p_min: the terminal p and s of
     every step (after a settle at p_min)."""
     n = int(round((p_max_kpa - p_min_kpa) / step_kpa))
-    levels = [p_min_kpa + step_kpa * i for i in range(1, n + 1)] + [p_min_kpa + step_kpa * i for i in range(n - 1, -1, -1)]
+    levels = ([p_min_kpa + step_kpa * i for i in range(1, n + 1)]
+              + [p_min_kpa + step_kpa * i for i in range(n - 1, -1, -1)])
     r = run_commands(params, [(lv, hold_s) for lv in levels], p_min_kpa)
     k = int(round(hold_s / SAMPLE_S))
     idx = np.arange(1, len(levels) + 1) * k

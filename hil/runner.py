@@ -173,7 +173,7 @@ class Runner:
         filters: list[dict[str, Any]] = []
         for n in nodes:
             filters += frame_filters(self.proto, msgs, n)
-        self.bus.set_filters(filters)
+        self.bus.set_filters(filters)  # type: ignore[arg-type]  # python-can takes these dicts
         # the DBC of these nodes beside the bus log: any DBC viewer decodes the log with it
         write_node_dbc(self.out / BUS_DBC, nodes, self.proto)
         rp = self.sc.rig_params()
@@ -299,9 +299,9 @@ class Runner:
                                f"{sorted(self.lanes[i].node for i in pending)} within {self.opts.reply_timeout_s:g} s "
                                f"at tick {self.tick}")
             t_wait = time.perf_counter()
-            msg = self.bus.recv(left)
+            rx = self.bus.recv(left)
             self.t_recv_s += time.perf_counter() - t_wait
-            got = self._receive(msg) if msg is not None else None
+            got = self._receive(rx) if rx is not None else None
             if got is None:
                 continue
             lane, sig = got
@@ -371,8 +371,9 @@ class Runner:
             return None
         if len(msg.data) != 4:
             return None
-        return lane, self.proto.messages["PLANT_ACTUATOR"].decode(bytes(msg.data), decode_choices=False,
-                                                                   scaling=False)
+        decoded = self.proto.messages["PLANT_ACTUATOR"].decode(bytes(msg.data), decode_choices=False, scaling=False)
+        assert isinstance(decoded, dict)        # not a container message
+        return lane, decoded
 
     def _other_frame(self, lane: Lane, name: str, msg: can.Message) -> None:
         try:

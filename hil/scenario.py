@@ -49,7 +49,6 @@ from pathlib import Path
 from typing import Any
 
 from pmactl.protocol import Protocol, load_protocol
-
 from pmactl.rules import broken_rule
 
 from .rig_params import RigParams

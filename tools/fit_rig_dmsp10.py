@@ -46,7 +46,6 @@ from __future__ import annotations
 import argparse
 import csv
 import json
-import math
 import os
 import sys
 import time
@@ -369,7 +368,8 @@ def plot_holds(ids: np.ndarray, s_meas: np.ndarray, p_meas: np.ndarray, sim: dic
         ax.axvspan(ids.min() - 0.5, FIT_LAST_HOLD + 0.5, color="0.9", zorder=0)
         ax.set_ylabel(unit)
         ax.grid(True, alpha=0.3)
-        ax.set_title(f"{unit}: RMS error fit {rms['fit_rms_' + key]:.3g}, validation {rms['validation_rms_' + key]:.3g}",
+        ax.set_title(f"{unit}: RMS error fit {rms['fit_rms_' + key]:.3g}, "
+                     f"validation {rms['validation_rms_' + key]:.3g}",
                      fontsize=9)
     axes[0].legend(fontsize=8)
     axes[1].set_xlabel(f"hold (shaded: fit holds 2-{FIT_LAST_HOLD}; the rest: validation)")

@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Any
 
 import cantools
+
 from pmactl.protocol import param_table_hash, protocol_version
 
 ROOT = Path(__file__).resolve().parents[1]

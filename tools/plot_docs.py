@@ -248,7 +248,7 @@ class TestPlant:
 
     x: float = -0.5
     v: float = 0.0
-    l: float = 0.0
+    l: float = 0.0  # noqa: E741 (the coefficient named l in the test plant it mirrors)
     b: float = 0.05
     f: float = 2.0
     d: float = 30.0

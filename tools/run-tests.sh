@@ -156,11 +156,13 @@ vcan_hil() {
 
 NO_CAN_TESTS=(tests/golden tests/protocol hil/tests/test_rig.py hil/tests/test_rig_profiles.py
   hil/tests/test_scenarios.py hil/tests/test_offline.py hil/tests/test_metrics_names.py
-  hil/tests/test_param_rules.py)
+  hil/tests/test_param_rules.py hil/tests/test_summary_flags.py hil/tests/test_commission.py)
 
 stage "set-up (tools/setup.sh)" bash tools/setup.sh
 stage "generated code and docs are current (tools/gen_protocol.py --check)" \
   .venv/bin/python tools/gen_protocol.py --check
+stage "lint: ruff (every Python file, ruff.toml), mypy (pmactl and the harness, mypy.ini)" \
+  bash -c '.venv/bin/ruff check . && .venv/bin/mypy'
 if ((QUICK)); then
   stage "build host, host-offline (tools/build-all.sh)" bash tools/build-all.sh host host-offline
   stage "ctest host" ctest --preset host -j2

@@ -27,8 +27,8 @@ import numpy as np
 import pytest
 
 from hil import scenario as scn
-from hil.fw_process import FW_HOST, BUILD_HINT
-from hil.runner import STOP_FILE, RunOptions, Runner
+from hil.fw_process import BUILD_HINT, FW_HOST
+from hil.runner import STOP_FILE, Runner, RunOptions
 
 REPO = Path(__file__).resolve().parents[2]
 

@@ -373,11 +373,13 @@ def test_hysteresis_loop_is_visible_and_bounded():
     assert width < 0
     assert abs(width) == pytest.approx(expect, rel=0.1)
     # the published loop: about 16 % of the 0-600 kPa stroke at 300 kPa; bounded well below the band
-    stroke = Rig(quiet(**{"load.mass_kg": 1e-9})).static_x_cm(0.0) - Rig(quiet(**{"load.mass_kg": 1e-9})).static_x_cm(600.0)
+    light = Rig(quiet(**{"load.mass_kg": 1e-9}))
+    stroke = light.static_x_cm(0.0) - light.static_x_cm(600.0)
     assert 0.10 < abs(width) / stroke < 0.25
     assert abs(width) < 0.5
     # without friction no loop
-    flat = Rig(quiet(**{"regulator.hysteresis_frac_fs": 0.0, "muscle.hyst_force_n": 0.0, "drift.temp_rate_k_per_s": 0.0}))
+    flat = Rig(quiet(**{"regulator.hysteresis_frac_fs": 0.0, "muscle.hyst_force_n": 0.0,
+                        "drift.temp_rate_k_per_s": 0.0}))
     hold(flat, 100.0, 1.0)
     u2 = _staircase(flat, [200.0, 300.0, 400.0])
     d2 = _staircase(flat, [300.0])

@@ -154,7 +154,8 @@ def test_extended_model_keeps_the_static_model_and_is_deterministic():
         assert r.s_mm[-1] == pytest.approx(rig.static_xs_mm(r.p_kpa[-1]), abs=0.02)
         # which is the regulator's set point (within its backlash, 0.5 % FS)
         r_p = p.regulator
-        assert r.p_kpa[-1] == pytest.approx(rig.regulator_static_kpa(300.0), abs=0.5 * r_p.hysteresis_frac_fs * r_p.fs_kpa + 0.5)
+        assert r.p_kpa[-1] == pytest.approx(rig.regulator_static_kpa(300.0),
+                                            abs=0.5 * r_p.hysteresis_frac_fs * r_p.fs_kpa + 0.5)
     a = run_commands(RigParams.from_dict({"profile": "dmsp10"}), [(250.0, 1.0), (80.0, 1.0)], 150.0)
     b = run_commands(RigParams.from_dict({"profile": "dmsp10"}), [(250.0, 1.0), (80.0, 1.0)], 150.0)
     assert np.array_equal(a.s_mm, b.s_mm) and np.array_equal(a.p_kpa, b.p_kpa)

@@ -22,10 +22,12 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 
 from hil import offline
 from hil import scenario as scn
+from hil.reference import reference_function
 
 VARIANTS = sorted(p.stem for p in (Path(scn.__file__).parent / "scenarios/variants").glob("*.toml"))
 MFAC_SLACK = 1.25   # at most 25 % above MFAC's RMSTE in a window, measured up to 1.12 (docs/hil.md)
@@ -83,3 +85,53 @@ def test_some_variant_loses_the_guarantee(variant_runs):
     """The variants span rigs where the shipped set cannot keep its promise, so the fallback
     is exercised, not only present."""
     assert any(s["controllers"]["ppc"]["guarantee_lost_at_s"] is not None for s in variant_runs.values())
+
+
+# ------------------------------------------------------------ with commissioning --
+COMMISSIONED_S = 60.0   # the commissioned runs: Case 3's first two windows
+
+
+@pytest.fixture(scope="session")
+def commissioned_runs() -> dict[str, tuple[Any, dict[str, Any]]]:
+    """Every rig of the variants and the nominal one: `pmactl commission` on it (over CAN frames,
+    offline), then Case 3's ppc lane on the derived set plus the task's w1 and t_u."""
+    from hil.commissioned import commission, commissioned
+    names = ["case3"] + [f"variants/{n}" for n in VARIANTS]
+    scs, results = [], []
+    for name in names:
+        sc = scn.load(name)
+        sc.controllers = [c for c in sc.controllers if c.label == "ppc"]
+        sc.duration_s = sc.quick_duration_s = COMMISSIONED_S
+        sc.windows = [w for w in sc.windows if w[1] <= COMMISSIONED_S]
+        r = commission(sc)
+        results.append(r)
+        scs.append(commissioned(sc, r))
+    summaries = offline.run_scenarios(scs, quick=False, jobs=JOBS)
+    return {n: (r, s) for n, r, s in zip(names, results, summaries)}
+
+
+def test_commissioning_takes_under_a_minute_of_rig_time(commissioned_runs):
+    for name, (r, _) in commissioned_runs.items():
+        assert r.rig_time_s < 60.0, name
+        assert r.derivation.margins["phase_margin_deg"] >= 45.0, name
+
+
+def test_commissioned_set_never_faults_and_holds_the_guarantee_where_the_task_is_feasible(commissioned_runs):
+    """Feasible: the reference comes no further than w1 / 2 beyond the stroke the commissioning
+    measured, so that |e| < w1 can hold (a reference further out is beyond the muscle's reach on
+    that rig, and the loss is then flagged)."""
+    feasible_rigs = 0
+    for name, (r, s) in commissioned_runs.items():
+        c = s["controllers"]["ppc"]
+        assert (s["state"]["ppc"], s["fault_code"]["ppc"]) == ("RUNNING", "NONE"), name
+        lo, hi = r.derivation.figures["stroke_min_cm"], r.derivation.figures["stroke_max_cm"]
+        sc = scn.load(name)
+        xr = reference_function(sc.reference)(np.arange(0.0, COMMISSIONED_S, 1e-3))
+        feasible = lo - 0.5 * c["w1_cm"] < xr.min() and xr.max() < hi + 0.5 * c["w1_cm"]
+        if feasible:
+            feasible_rigs += 1
+            assert c["guarantee_lost_at_s"] is None, f"{name}: lost at {c['guarantee_lost_at_s']} s"
+            assert c["samples_outside_w1_after_tu"] == 0, name
+        elif c["guarantee_lost_at_s"] is not None:
+            assert c["fallback_at_s"] == c["guarantee_lost_at_s"], name
+    assert feasible_rigs >= len(commissioned_runs) // 2      # the assertion above is exercised

@@ -12,8 +12,8 @@ from pathlib import Path
 from typing import Any, Callable, Iterator
 
 import pytest
-
 from fakenode import FakeNode
+
 from pmactl.cli import main
 
 

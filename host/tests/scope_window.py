@@ -17,6 +17,7 @@ from pathlib import Path
 from fakenode import FakeNode
 from matplotlib.backend_bases import KeyEvent
 from PIL import ImageGrab
+
 from pmactl import scope
 from pmactl.cli import main
 

@@ -10,6 +10,7 @@ from typing import Any
 
 import can
 import pytest
+
 from pmactl import adapters
 from pmactl.cli import EXIT_INTERFACE
 

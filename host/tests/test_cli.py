@@ -10,11 +10,10 @@ from pathlib import Path
 
 import can
 import pytest
-
 from fakenode import PROTO, STATE, UNKNOWN_ID, wait_until
+
 from pmactl import cli, paramfile
-from pmactl.cli import (EXIT_FILE, EXIT_INTERFACE, EXIT_NO_REPLY, EXIT_OK, EXIT_REFUSED, EXIT_USAGE,
-                        main)
+from pmactl.cli import EXIT_FILE, EXIT_INTERFACE, EXIT_NO_REPLY, EXIT_OK, EXIT_REFUSED, EXIT_USAGE, main
 
 
 # ------------------------------------------------------------ bus, help, errors --

@@ -12,10 +12,18 @@ from pathlib import Path
 
 import can
 import pytest
-
 from fakenode import PROTO, UNKNOWN_ID, wait_until
-from pmactl import (NoReply, PmaNode, SetRejected, TelemetryGrouper, TelemetryRecorder, bus_config,
-                    load_protocol, paramfile)
+
+from pmactl import (
+    NoReply,
+    PmaNode,
+    SetRejected,
+    TelemetryGrouper,
+    TelemetryRecorder,
+    bus_config,
+    load_protocol,
+    paramfile,
+)
 from pmactl.client import DEFAULT_CHANNEL, InterfaceError, internal_labels
 from pmactl.protocol import HEARTBEAT_FLAGS, RESULT_MEANINGS, to_f32
 from pmactl.recording import COLUMNS, Recording, RecordingError, header_row, metrics, read_recording

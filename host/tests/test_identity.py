@@ -8,6 +8,7 @@ import re
 from pathlib import Path
 
 from fakenode import PROTO
+
 from pmactl.cli import EXIT_NO_REPLY, EXIT_OK, EXIT_REFUSED
 from pmactl.identity import device_tag
 from pmactl.protocol import param_table_hash, protocol_version

@@ -7,8 +7,8 @@ import json
 from pathlib import Path
 
 import pytest
-
 from fakenode import PROTO, STATE
+
 from pmactl.cli import EXIT_NO_REPLY, EXIT_OK, EXIT_REFUSED, EXIT_USAGE
 
 

@@ -14,7 +14,7 @@ import can
 import cantools
 import pytest
 from fakenode import PROTO
-from pmactl.protocol import BROADCASTS
+
 from pmactl.cli import EXIT_OK, EXIT_USAGE
 from pmactl.nodedbc import (
     NodeListError,
@@ -23,6 +23,7 @@ from pmactl.nodedbc import (
     parse_nodes,
     write_node_dbc,
 )
+from pmactl.protocol import BROADCASTS
 
 # One payload per message (valid signal values), encoded with the protocol's DBC.
 SAMPLES: dict[str, dict[str, Any]] = {

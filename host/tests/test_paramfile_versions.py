@@ -9,8 +9,8 @@ import json
 from pathlib import Path
 
 import pytest
-
 from fakenode import PROTO
+
 from pmactl import paramfile
 from pmactl.cli import EXIT_FILE, EXIT_OK
 from pmactl.protocol import Protocol

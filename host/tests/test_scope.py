@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 from fakenode import wait_until
 from PIL import Image
+
 from pmactl import scope
 from pmactl.cli import EXIT_NO_REPLY, EXIT_OK, EXIT_USAGE
 from pmactl.recording import header_row, read_recording

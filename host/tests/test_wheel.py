@@ -21,7 +21,6 @@ import zipfile
 from pathlib import Path
 
 import pytest
-
 from fakenode import PROTO
 
 HOST = Path(__file__).resolve().parents[1]
@@ -110,7 +109,8 @@ def check_install(py: Path, cwd: Path) -> None:
     assert r.stdout.startswith(f"pmactl {importlib.metadata.version('pmactl')} (protocol {PROTO.version}"), r.stdout
     r = subprocess.run([str(py), "-c", CHECK], capture_output=True, text=True, cwd=cwd, env=env, check=False)
     assert r.returncode == 0 and r.stdout.startswith("ok "), r.stdout + r.stderr
-    r = subprocess.run([str(pmactl), "dbc", "--nodes", "2"], capture_output=True, text=True, cwd=cwd, env=env, check=False)
+    r = subprocess.run([str(pmactl), "dbc", "--nodes", "2"], capture_output=True, text=True, cwd=cwd, env=env,
+                       check=False)
     assert r.returncode == 0 and "HEARTBEAT_N2" in r.stdout, r.stderr
 
 

@@ -280,7 +280,7 @@ def dict_entries() -> dict[str, bytes]:
         for node in (0, 1):
             fid = m.frame_id + node
             e[f"frame_{m.name.lower()}_n{node}"] = bytes([OP_FRAME, fid & 0xFF, fid >> 8, m.length])
-    for name, code in CMDS.items():
+    for name in CMDS:
         e[f"cmd_{name.lower()}"] = cmd(name)
     e["estop"] = msg("ESTOP")
     e["estop_all"] = msg("ESTOP_ALL")

@@ -35,7 +35,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import pma_reference as ref  # noqa: E402
-from pma_reference import f32, quantise_q16 as q  # noqa: E402
+from pma_reference import f32  # noqa: E402
+from pma_reference import quantise_q16 as q
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_OUT = HERE / "vectors"
@@ -623,7 +624,7 @@ def mfac_resets_set() -> dict:
     rel(None, -6.0, dy=-0.05, expect=1)             # du = 0 at u_min -> reset
     rel(None, 0.3, dy=0.1)
     rng = np.random.default_rng(2207)
-    for k in range(24):                             # plain steps, occasional resets
+    for _k in range(24):                             # plain steps, occasional resets
         for _ in range(200):
             y = m.y1 + rng.normal(0.0, 0.02)
             ys = q(y) + rng.normal(0.0, 0.03)

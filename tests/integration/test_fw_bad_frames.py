@@ -8,11 +8,31 @@ import struct
 import time
 
 import pytest
-
-from test_fw_lib import (FAULT, PROTO, RESULT, SAMPLE, STATE, RawCan, Rig, arm,
-                         arm_and_start, base_id, f32, f32_bits, param_raw, param_resp, query_state,
-                         replies_of, sentinel_get, snapshot, start, CAN_EFF_FLAG, CAN_RTR_FLAG,
-                         fresh_heartbeat, default_of)
+from test_fw_lib import (
+    CAN_EFF_FLAG,
+    CAN_RTR_FLAG,
+    FAULT,
+    PROTO,
+    RESULT,
+    SAMPLE,
+    STATE,
+    RawCan,
+    Rig,
+    arm,
+    arm_and_start,
+    base_id,
+    default_of,
+    f32,
+    f32_bits,
+    fresh_heartbeat,
+    param_raw,
+    param_resp,
+    query_state,
+    replies_of,
+    sentinel_get,
+    snapshot,
+    start,
+)
 
 NODE = 3
 OTHER_NODES = [n for n in range(16) if n != NODE]
@@ -89,7 +109,7 @@ def test_param_req_wrong_length_is_answered_length(idle_node) -> None:
     node.set("telem.mask", 30)
     for op in (2, 3, 8):
         node.send_raw(PARAM_REQ | NODE, bytes([op, 0, 0, 0]))
-        assert node.wait_for("PARAM_RESP", lambda s: s["Op"] == op)["Result"] == RESULT["LENGTH"]
+        assert node.wait_for("PARAM_RESP", lambda s, op=op: s["Op"] == op)["Result"] == RESULT["LENGTH"]
     assert node.get("telem.mask") == 30
     node.set("telem.mask", 31)
 

@@ -5,10 +5,24 @@ again) is no new sample; the heartbeat flags of the bridge."""
 from __future__ import annotations
 
 import pytest
-
-from test_fw_lib import (COUNTS_MID, FAULT, HB_LOCKSTEP, HB_PLANT_BRIDGE, HB_SENSOR_VALID, PROTO,
-                         SAMPLE, STATE, Rig, arm, fresh_heartbeat, frozen, query_state,
-                         replies_until, sentinel_get, start)
+from test_fw_lib import (
+    COUNTS_MID,
+    FAULT,
+    HB_LOCKSTEP,
+    HB_PLANT_BRIDGE,
+    HB_SENSOR_VALID,
+    PROTO,
+    SAMPLE,
+    STATE,
+    Rig,
+    arm,
+    fresh_heartbeat,
+    frozen,
+    query_state,
+    replies_until,
+    sentinel_get,
+    start,
+)
 
 NODE = 7
 
@@ -176,7 +190,7 @@ def test_one_actuator_per_sample_when_timing_is_reapplied(firmware, bus, tmp_pat
                 node.send("PARAM_REQ", req)
                 node.sensor_sample(seq, COUNTS_MID)
             rig.seq = (rig.seq + 1) & 0xFF
-            frames += replies_until(node, lambda name, nid, s: name == "PLANT_ACTUATOR" and nid == NODE
+            frames += replies_until(node, lambda name, nid, s, seq=seq: name == "PLANT_ACTUATOR" and nid == NODE
                                     and s["Seq"] == seq and s["Sample"] == SAMPLE["NEW"])
             frames += sentinel_get(node)
     frames += sentinel_get(node)
@@ -188,8 +202,8 @@ def test_one_actuator_per_sample_when_timing_is_reapplied(firmware, bus, tmp_pat
         if name == "PLANT_ACTUATOR" and nid == NODE:
             per_seq.setdefault(s["Seq"], []).append(PROTO._choices("PLANT_ACTUATOR", "Sample")[s["Sample"]])
     extra = {sent[q]: v for q, v in per_seq.items() if q in sent and v != ["NEW"]}
-    # Regression (a bug found by this test, now fixed): hal/portable/linux/linux_can.c pma_linux_can_tick_arm() recounts the
-    # tick frames still queued in the RX ring when the application re-starts
+    # Regression (a bug found by this test, now fixed): hal/portable/linux/linux_can.c
+    # pma_linux_can_tick_arm() recounts the tick frames still queued in the RX ring when the application re-starts
     # the tick (pma_app_apply_timing -> pma_hal_tick_start) while handling
     # frames; a sample whose tick pma_hal_tick_wait() has already taken is
     # counted again: a phantom tick (a second PLANT_ACTUATOR, Sample REPEATED).
@@ -220,8 +234,8 @@ def test_lockstep_queued_samples_each_make_their_own_tick(firmware, bus, depth) 
     acts = [(s["Seq"], PROTO._choices("PLANT_ACTUATOR", "Sample")[s["Sample"]], s["OutputActive"])
             for name, nid, s in got if name == "PLANT_ACTUATOR" and nid == NODE]
     hb = fresh_heartbeat(node)
-    # Regression (a bug found by this test, now fixed): firmware/app/app.c pma_app_step() handles up to PMA_APP_RX_PER_STEP
-    # (64) received frames before the one tick that tick_wait() granted, so
+    # Regression (a bug found by this test, now fixed): firmware/app/app.c pma_app_step()
+    # handles up to PMA_APP_RX_PER_STEP (64) received frames before the one tick that tick_wait() granted, so
     # every queued sample but the last is overwritten before any tick uses
     # it: one NEW tick with the last Seq, then REPEATED ticks (and, from
     # safety.sensor_timeout_ticks queued samples on, a SENSOR_TIMEOUT fault

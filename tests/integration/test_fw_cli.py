@@ -8,7 +8,6 @@ import signal
 import subprocess
 
 import pytest
-
 from conftest import CHANNEL, FW_HOST
 from test_fw_lib import STATE, drain, query_state
 

@@ -6,10 +6,24 @@ ESTOP_ALL stops both)."""
 from __future__ import annotations
 
 import pytest
-
-from test_fw_lib import (CMD, COUNTS_MID, FAULT, PROTO, STATE, Rig, arm, arm_and_start,
-                         base_id, cm_to_counts, fresh_heartbeat, query_state, sentinel_get, start,
-                         replies_of, default_of)
+from test_fw_lib import (
+    CMD,
+    COUNTS_MID,
+    FAULT,
+    PROTO,
+    STATE,
+    Rig,
+    arm,
+    arm_and_start,
+    base_id,
+    cm_to_counts,
+    default_of,
+    fresh_heartbeat,
+    query_state,
+    replies_of,
+    sentinel_get,
+    start,
+)
 
 NODE = 3
 

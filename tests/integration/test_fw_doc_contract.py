@@ -9,8 +9,7 @@ bytes are then 0). SET checks the id before the Type (UNKNOWN_ID before TYPE).""
 from __future__ import annotations
 
 import can
-
-from test_fw_lib import RESULT, STATE, base_id, drain, param_raw, query_state, start
+from test_fw_lib import STATE, base_id, drain, param_raw, query_state, start
 
 NODE = 3
 PARAM_REQ = base_id("PARAM_REQ") | NODE
@@ -140,6 +139,7 @@ def test_storage_file_must_be_8192_bytes(tmp_path, firmware, bus) -> None:
     """docs/firmware.md --storage: created with 8,192 bytes; an existing file of another
     size (an empty one made by touch) is refused with exit status 1 and left alone."""
     import subprocess
+
     from conftest import CHANNEL, FW_HOST
     empty = tmp_path / "node.nvm"
     empty.touch()

@@ -11,11 +11,33 @@ import signal
 import time
 
 import pytest
+from test_fw_lib import (
+    CAN_ERR_DLC,
+    CAN_ERR_FLAG,
+    COUNTS_MID,
+    FAULT,
+    PROTO,
+    RESET,
+    RESULT,
+    SAMPLE,
+    STATE,
+    RawCan,
+    Rig,
+    arm,
+    arm_and_start,
+    cm_to_counts,
+    counts_to_cm,
+    dac_counts,
+    default_of,
+    drain,
+    f32,
+    fresh_heartbeat,
+    frozen,
+    query_state,
+    start,
+    wait_state,
+)
 
-from test_fw_lib import (CAN_ERR_DLC, CAN_ERR_FLAG, COUNTS_MID, FAULT, PROTO, RESET, RESULT, SAMPLE,
-                         STATE, RawCan, Rig, arm, arm_and_start, cm_to_counts, counts_to_cm,
-                         dac_counts, default_of, drain, f32, fresh_heartbeat, frozen, query_state,
-                         start, wait_state)
 from pmactl.client import NoReply
 
 NODE = 5
@@ -191,7 +213,7 @@ def test_host_heartbeat_lost_exact_tick(firmware, bus, tick_hz, timeout_ms) -> N
     assert node.clear_faults().state == STATE["IDLE"]
     rig = arm_and_start(node, rig, settle_ticks=1)
     for _ in range(3):
-        for i in range(1, n):
+        for _i in range(1, n):
             assert rig.tick()["OutputActive"] == 1
         node.host_heartbeat()
     for i in range(1, n):
@@ -252,7 +274,7 @@ def test_barrier_fault_after_barrier_ticks_consecutive_clamps(firmware, bus) -> 
     far = cm_to_counts(-0.2)
     rig = arm_and_start(node, Rig(node, counts=far), settle_ticks=2)
     clamped = []
-    for tick in range(1, 2000):
+    for _tick in range(1, 2000):
         act = rig.tick(far, host_heartbeat=True)
         if act["OutputActive"] == 0:
             assert act["DacCounts"] == 0
@@ -419,7 +441,7 @@ def test_clear_faults_while_bus_off(firmware, bus) -> None:
     fw, node = start(firmware, bus, node=NODE)
     node.set("sys.heartbeat_ms", 10)
     refused = 0
-    for attempt in range(6):
+    for _attempt in range(6):
         node.estop()
         assert_fault(node, "ESTOP")
         with RawCan() as raw, frozen(fw.proc.pid):

@@ -1,8 +1,8 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Issue 16, point 7: a flood of valid requests (PARAM_REQ GETs to the node's own id at
-a high rate) must leave the control tick and the tracking unchanged (docs/protocol.md "Bad input": the node reads at most 128 frames per loop
-iteration, handles the control-relevant ones at once, answers at most 8 requests per
-iteration and drops, counted, what does not fit its request queue).
+"""A flood of valid requests (PARAM_REQ GETs to the node's own id at a high rate) must
+leave the control tick and the tracking unchanged (docs/protocol.md "Bad input": the node
+reads at most 128 frames per loop iteration, handles the control-relevant ones at once,
+answers at most 8 requests per iteration and drops, counted, what does not fit its request queue).
 
 The node runs in lockstep, so the closed loop is deterministic: the same samples give
 the same commands. The test runs the same closed loop (a plant after the paper's eq. 7,

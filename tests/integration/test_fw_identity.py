@@ -11,8 +11,8 @@ from pathlib import Path
 
 import can
 import pytest
-
 from conftest import CHANNEL, FW_HOST
+
 from pmactl import cli, identity
 from pmactl.client import PmaNode
 from pmactl.protocol import Protocol, param_table_hash, protocol_version

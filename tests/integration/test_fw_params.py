@@ -8,8 +8,18 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from test_fw_lib import (HB_PARAMS_CHANGED, HB_PARAMS_DEFAULT, PROTO, RESULT, STATE, arm, f32,
-                         fresh_heartbeat, query_state, start)
+from test_fw_lib import (
+    HB_PARAMS_CHANGED,
+    HB_PARAMS_DEFAULT,
+    PROTO,
+    RESULT,
+    STATE,
+    arm,
+    f32,
+    fresh_heartbeat,
+    query_state,
+    start,
+)
 
 ROOT = Path(__file__).resolve().parents[2]
 NODE = 2

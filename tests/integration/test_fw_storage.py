@@ -12,10 +12,22 @@ import time
 from pathlib import Path
 
 import pytest
-
-from test_fw_lib import (EXIT_POWER_CUT, HB_PARAMS_CHANGED, HB_PARAMS_DEFAULT, HB_SAVE_FAILED, PROTO,
-                         RESULT, STATE, arm, default_of, drain, fresh_heartbeat, query_state,
-                         snapshot, start)
+from test_fw_lib import (
+    EXIT_POWER_CUT,
+    HB_PARAMS_CHANGED,
+    HB_PARAMS_DEFAULT,
+    HB_SAVE_FAILED,
+    PROTO,
+    RESULT,
+    STATE,
+    arm,
+    default_of,
+    drain,
+    fresh_heartbeat,
+    query_state,
+    snapshot,
+    start,
+)
 
 NODE = 4
 

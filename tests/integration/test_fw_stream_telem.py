@@ -7,10 +7,23 @@ from __future__ import annotations
 import struct
 
 import pytest
-
-from test_fw_lib import (COUNTS_MID, PROTO, STATE, Rig, arm, arm_and_start, base_id, counts_to_cm,
-                         default_of, f32, f32_bits, query_state, replies_until,
-                         sentinel_get, start)
+from test_fw_lib import (
+    COUNTS_MID,
+    PROTO,
+    STATE,
+    Rig,
+    arm,
+    arm_and_start,
+    base_id,
+    counts_to_cm,
+    default_of,
+    f32,
+    f32_bits,
+    query_state,
+    replies_until,
+    sentinel_get,
+    start,
+)
 
 NODE = 6
 SETPOINT = base_id("SETPOINT")
@@ -119,7 +132,7 @@ def test_stream_negative_rate_refused_at_start(firmware, bus) -> None:
     """ref.rate_cm_s is the STREAM rate limit, >= 0: a negative one makes
     START fail (RANGE) and the node stays ARMED."""
     fw, node = stream_node(firmware, bus, rate=-1.0)
-    rig = arm(node, settle_ticks=1)
+    arm(node, settle_ticks=1)
     ack = node.command("START", check=False)
     assert PROTO.status_name(ack.result) == "RANGE" and ack.state == STATE["ARMED"], ack
     fw.stop()
@@ -148,7 +161,8 @@ def run_ticks(node, rig: Rig, n: int) -> list[tuple[str, dict]]:
         seq = rig.seq
         node.sensor_sample(seq, rig.counts)
         rig.seq = (rig.seq + 1) & 0xFF
-        got = replies_until(node, lambda name, nid, s: name == "PLANT_ACTUATOR" and nid == NODE and s["Seq"] == seq)
+        got = replies_until(node, lambda name, nid, s, seq=seq: name == "PLANT_ACTUATOR" and nid == NODE
+                            and s["Seq"] == seq)
         out += [(name, s) for name, nid, s in got if nid == NODE and name != "HEARTBEAT"]
     out += [(name, s) for name, nid, s in sentinel_get(node) if nid == NODE and name != "HEARTBEAT"]
     return out

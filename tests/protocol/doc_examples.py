@@ -31,7 +31,7 @@ BROADCAST_IDS = (0x000, 0x120)   # ESTOP_ALL, DEVICE_INFO_REQ_ALL: no node id
 WILDCARD = "XX"
 
 _FENCE = re.compile(r"^```(\S*)\s*$")
-_CANDUMP_LINE = re.compile(r"^\s*(\S+)\s+([0-9A-Fa-f]{3})\s+\[(\d)\]\s*((?:[0-9A-Fa-f]{2}|XX)(?:\s+(?:[0-9A-Fa-f]{2}|XX))*)?\s*$")
+_CANDUMP_LINE = re.compile(r"^\s*(\S+)\s+([0-9A-Fa-f]{3})\s+\[(\d)\]\s*((?:[0-9A-Fa-f]{2}|XX)(?:\s+(?:[0-9A-Fa-f]{2}|XX))*)?\s*$")  # noqa: E501
 _CANSEND_FRAME = re.compile(r"^([0-9A-Fa-f]{3})#((?:[0-9A-Fa-f]{2})*)$")
 
 
@@ -251,7 +251,7 @@ def parse_transition_cell(cell: str) -> tuple[str, str]:
 def transition_table(text: str) -> tuple[list[str], list[tuple[str, dict[str, tuple[str, str]]]]]:
     """The state machine's table: (state columns, [(first cell, {state: (result, new state)})])."""
     after = text.split("\n## State machine\n", 1)[1]
-    heads = [l for l in after.splitlines() if l.startswith("| command")]
+    heads = [line for line in after.splitlines() if line.startswith("| command")]
     if not heads:
         raise KeyError("no transition table (header '| command | IDLE | ...')")
     states = split_row(heads[0])[1:]

@@ -10,7 +10,6 @@ import sys
 from pathlib import Path
 
 import pytest
-
 from doc_examples import DOC, read_doc, section
 
 ROOT = Path(__file__).resolve().parents[2]

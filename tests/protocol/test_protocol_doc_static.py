@@ -6,12 +6,10 @@ run by tests/integration/test_protocol_doc.py)."""
 from __future__ import annotations
 
 import re
-from pathlib import Path
 
 import cantools
-import pytest
-
 import doc_examples as dx
+import pytest
 
 ROOT = dx.ROOT
 APP_H = ROOT / "firmware/app/app.h"

@@ -18,7 +18,22 @@ static pma_app_t app;
 static struct {
     uint8_t ready;
     uint8_t seq;                 /* the last PLANT_SENSOR sequence number sent */
+    uint8_t host_queue_on;
+    uint32_t head, count, dropped;
+    pma_can_frame_t host_queue[PMA_OFFLINE_HOST_QUEUE];
 } node;
+
+/* A frame the node sent, kept for the host (when the host queue is on). */
+static void keep_for_host(const pma_can_frame_t *f)
+{
+    if (!node.host_queue_on) return;
+    if (node.count == PMA_OFFLINE_HOST_QUEUE) {
+        ++node.dropped;
+        return;
+    }
+    node.host_queue[(node.head + node.count) % PMA_OFFLINE_HOST_QUEUE] = *f;
+    ++node.count;
+}
 
 int pma_offline_api_version(void)
 {
@@ -55,6 +70,8 @@ static int exchange(uint16_t base_id, pma_can_frame_t *reply)
         if (!found && is_ours(&f, base_id)) {
             *reply = f;
             found = 1;
+        } else {
+            keep_for_host(&f);
         }
     }
     return found ? PMA_OK : PMA_ERR_IO;
@@ -83,8 +100,56 @@ int pma_offline_init(uint8_t node_id)
     while (pma_fake_can_tx_pop(&f) == PMA_OK) {
     }
     node.seq = 0;
+    node.host_queue_on = 0;
+    node.head = node.count = node.dropped = 0;
     node.ready = (uint8_t)(rc == PMA_OK);
     return rc;
+}
+
+/* ---------------------------------------------------------- raw frames -- */
+
+void pma_offline_host_queue(int on)
+{
+    node.host_queue_on = (uint8_t)(on != 0);
+}
+
+int pma_offline_frame_in(uint16_t id, uint8_t dlc, const uint8_t *data)
+{
+    if (!node.ready) return PMA_ERR_NOT_READY;
+    if (id > PMA_CAN_ID_MAX || dlc > PMA_CAN_DLC_MAX || (dlc > 0 && data == NULL)) return PMA_ERR_RANGE;
+    pma_can_frame_t f;
+    memset(&f, 0, sizeof f);
+    f.id = id;
+    f.dlc = dlc;
+    if (dlc > 0) memcpy(f.data, data, dlc);
+    return pma_fake_can_inject(&f);
+}
+
+int pma_offline_loop(void)
+{
+    if (!node.ready) return PMA_ERR_NOT_READY;
+    const int rc = pma_app_step(&app);
+    pma_can_frame_t f;
+    while (pma_fake_can_tx_pop(&f) == PMA_OK) keep_for_host(&f);
+    return rc;
+}
+
+int pma_offline_frame_out(uint16_t *id, uint8_t *dlc, uint8_t *data)
+{
+    if (id == NULL || dlc == NULL || data == NULL) return PMA_ERR_NULL;
+    if (node.count == 0) return PMA_ERR_EMPTY;
+    const pma_can_frame_t *f = &node.host_queue[node.head];
+    *id = f->id;
+    *dlc = f->dlc;
+    memcpy(data, f->data, 8u);
+    node.head = (node.head + 1u) % PMA_OFFLINE_HOST_QUEUE;
+    --node.count;
+    return PMA_OK;
+}
+
+uint32_t pma_offline_host_dropped(void)
+{
+    return node.dropped;
 }
 
 /* ---------------------------------------------------------- parameters -- */
@@ -295,6 +360,7 @@ int pma_offline_tick(uint16_t raw_counts, pma_offline_tick_t *out)
             actuator = 1;
         } else {
             take_telemetry(&f, out);
+            keep_for_host(&f);
         }
     }
     out->state = app.state;

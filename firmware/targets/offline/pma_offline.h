@@ -31,7 +31,7 @@
 #include <stdint.h>
 
 /* Bumped whenever a function or a struct below changes (hil/offline.py checks it). */
-#define PMA_OFFLINE_API_VERSION 1
+#define PMA_OFFLINE_API_VERSION 2
 
 /* What one tick sent: the PLANT_ACTUATOR frame decoded, and the telemetry
  * frames if the tick sent them (telem_frames: bit i = TELEM_A + i, the values
@@ -101,6 +101,25 @@ int pma_offline_host_heartbeat(uint8_t counter);
  * back (cannot happen unless the application is broken), else PMA_OK or the
  * loop's error. */
 int pma_offline_tick(uint16_t raw_counts, pma_offline_tick_t *out);
+
+/* Raw frames, for a host that speaks the protocol itself (hil/offline_bus.py: a python-can
+ * bus whose other end is this node, so pmactl's client runs against the real firmware
+ * without CAN). With the host queue on, every frame the node sends (also during a tick,
+ * except the tick's PLANT_ACTUATOR, which the caller gets in pma_offline_tick_t) is kept
+ * for pma_offline_frame_out, up to PMA_OFFLINE_HOST_QUEUE frames (then the newest are
+ * dropped and counted, as a full socket buffer drops them). */
+#define PMA_OFFLINE_HOST_QUEUE 512
+void pma_offline_host_queue(int on);   /* off after pma_offline_init */
+/* A frame from the host (11-bit id, dlc 0..8): queued in the node's receive queue, handled by
+ * the next loop iteration (pma_offline_loop or a tick). PMA_ERR_RANGE for a bad id or dlc,
+ * PMA_ERR_FULL when the receive queue is full. */
+int pma_offline_frame_in(uint16_t id, uint8_t dlc, const uint8_t *data);
+/* One main-loop iteration without a tick: the queued frames are handled. */
+int pma_offline_loop(void);
+/* The oldest frame the node sent that the host has not taken: PMA_OK, or PMA_ERR_EMPTY. */
+int pma_offline_frame_out(uint16_t *id, uint8_t *dlc, uint8_t *data);
+/* Frames dropped because the host queue was full, since init. */
+uint32_t pma_offline_host_dropped(void);
 
 int pma_offline_state(void);  /* pma_app_state_t */
 int pma_offline_fault(void);  /* pma_fault_t */

@@ -6,10 +6,28 @@ the package: the DBC (``data/pma_proto.dbc``) and the parameter table
 (``data/params.toml``). The client (pmactl.client.PmaNode) serves the command line
 (pmactl.cli), the HIL harness and the tests.
 """
-from pmactl.client import (Ack, BusMonitor, CommandError, InterfaceError, LoadReport, MonitorEvent,
-                           NodeStateError, NoReply, ParamInfo, PmaError, PmaNode, RecordSummary,
-                           SetRejected, Status, TelemetryGrouper, TelemetryRecorder, TelemetryRow,
-                           bus_config, open_bus, scan)
+from pmactl.client import (
+                           Ack,
+                           BusMonitor,
+                           CommandError,
+                           InterfaceError,
+                           LoadReport,
+                           MonitorEvent,
+                           NodeStateError,
+                           NoReply,
+                           ParamInfo,
+                           PmaError,
+                           PmaNode,
+                           RecordSummary,
+                           SetRejected,
+                           Status,
+                           TelemetryGrouper,
+                           TelemetryRecorder,
+                           TelemetryRow,
+                           bus_config,
+                           open_bus,
+                           scan,
+)
 from pmactl.nodedbc import NodeListError, node_database, parse_nodes, write_node_dbc
 from pmactl.protocol import Param, Protocol, load_protocol
 

@@ -20,9 +20,26 @@ import can
 import cantools
 
 from pmactl import adapters, identity, paramfile
-from pmactl.client import (NODE_REPLIES, CommandError, InterfaceError, MonitorEvent, BusMonitor, NodeStateError,
-                           NoReply, ParamInfo, PmaError, PmaNode, RecordProgress, SetRejected,
-                           Status, TelemetryRecorder, bus_config, describe_bus, open_bus, scan)
+from pmactl.client import (
+    NODE_REPLIES,
+    BusMonitor,
+    CommandError,
+    InterfaceError,
+    MonitorEvent,
+    NodeStateError,
+    NoReply,
+    ParamInfo,
+    PmaError,
+    PmaNode,
+    RecordProgress,
+    SetRejected,
+    Status,
+    TelemetryRecorder,
+    bus_config,
+    describe_bus,
+    open_bus,
+    scan,
+)
 from pmactl.nodedbc import NodeListError, node_dbc_text, parse_nodes, write_node_dbc
 from pmactl.protocol import BROADCASTS, Param, Protocol, load_protocol
 from pmactl.recording import RecordingError, metrics, read_recording
@@ -106,6 +123,26 @@ def _positive(text: str) -> float:
         raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
     if not (math.isfinite(v) and v > 0):
         raise argparse.ArgumentTypeError(f"{text} is not a positive number of seconds")
+    return v
+
+
+def _positive_value(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not (math.isfinite(v) and v > 0):
+        raise argparse.ArgumentTypeError(f"{text} is not a positive number")
+    return v
+
+
+def _nonnegative(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not (math.isfinite(v) and v >= 0):
+        raise argparse.ArgumentTypeError(f"{text} is not a number >= 0")
     return v
 
 
@@ -238,6 +275,26 @@ def build_parser() -> argparse.ArgumentParser:
                         "heartbeats and telemetry; a busy bus can then overrun pmactl)")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress display")
 
+    p = add("commission", "measure a freshly wired rig over CAN and derive the controllers' parameters "
+                          "(docs/commissioning.md): wiring check, static map, step responses, rules; the node "
+                          "must be IDLE with its sensor and DAC scalings set. Without --apply nothing changes "
+                          "on the node")
+    p.add_argument("--w1", type=_positive_value, required=True, metavar="CM", help="the task's accuracy w1 [cm]")
+    p.add_argument("--t-u", type=_positive_value, required=True, metavar="S", help="the task's tuning time t_u [s]")
+    p.add_argument("--x-min", type=_finite, metavar="CM",
+                   help="the lower output constraint [cm] (default: the node's safety.x_min_cm)")
+    p.add_argument("--x-max", type=_finite, metavar="CM",
+                   help="the upper output constraint [cm] (default: the node's safety.x_max_cm)")
+    p.add_argument("--x-start", type=_finite, metavar="CM",
+                   help="where the task's reference starts [cm] (default: the band's middle)")
+    p.add_argument("--speed", type=_nonnegative, default=0.0, metavar="CM_S",
+                   help="the reference's largest speed [cm/s] (default 0: set-points)")
+    p.add_argument("--out", metavar="DIR", help="write report.json, params.json (the params dump format) and "
+                                                "figures (static map, step responses, noise) into DIR")
+    p.add_argument("--apply", action="store_true", help="SET the derived parameters on the node (RAM)")
+    p.add_argument("--save", action="store_true", help="with --apply: also SAVE them (persist)")
+    p.add_argument("--quiet", "-q", action="store_true", help="no progress display")
+
     p = add("plot", "PNG figures of a recording, in the style of the paper's, and its numbers "
                     "(entry into the w1 band, max |e| and RMSTE after t_u, peak velocity and input)")
     p.add_argument("csv", metavar="CSV")
@@ -335,6 +392,8 @@ class Session:
             elif cmd == "monitor":
                 self._node.listen_to(["HEARTBEAT", "ESTOP", "ESTOP_ALL", "COMMAND", "COMMAND_ACK",
                                       "PARAM_RESP"], node=None)
+            elif cmd == "commission":  # the replies, and the telemetry it steps the rig by
+                self._node.listen_to(list(NODE_REPLIES) + ["TELEM_A", "TELEM_E"])
             elif cmd not in ("record", "scope"):
                 self._node.listen_to(NODE_REPLIES)
         return self._node
@@ -408,8 +467,8 @@ def cmd_scan(s: Session) -> int:
     rows = [["node", "state", "fault", "controller", "reference", "firmware", "unique id", "flags"]]
     for nid in sorted(set(found) | set(devices)):
         st = found.get(nid)
-        devs = devices.get(nid) or [None]
-        for dev in devs:
+        known: list[identity.DeviceInfo | None] = list(devices.get(nid, []))
+        for dev in known or [None]:
             fw = dev.fw_text if dev is not None else "(no DEVICE_INFO)"
             uid = dev.uid_hex if dev is not None else "?"
             if st is None:
@@ -906,9 +965,53 @@ COMMANDS: dict[str, Callable[[Session], int]] = {
     "clear-faults": cmd_command, "estop": cmd_estop, "controller": cmd_select,
     "reference": cmd_select, "setpoint": cmd_setpoint, "record": cmd_record, "plot": cmd_plot,
     "monitor": cmd_monitor, "node-id": cmd_node_id, "dbc": cmd_dbc, "scope": cmd_scope,
+    "commission": lambda s: cmd_commission(s),
 }
 # Commands that work on one node (or on the whole bus) and so take no list of nodes.
-SINGLE_NODE = ("scan", "record", "plot", "monitor", "node-id")
+SINGLE_NODE = ("scan", "record", "plot", "monitor", "node-id", "commission")
+
+
+def cmd_commission(s: Session) -> int:
+    from . import commission, commission_report
+    from .commission_rules import CommissionError, Task
+    args = s.args
+    if args.save and not args.apply:
+        raise UsageError("--save needs --apply (nothing is set without it)")
+    out_dir = Path(args.out) if args.out else None
+    if out_dir is not None and out_dir.exists() and not out_dir.is_dir():
+        raise UsageError(f"--out {args.out}: not a directory")
+    node = s.node
+    x_min = args.x_min if args.x_min is not None else float(node.get("safety.x_min_cm"))
+    x_max = args.x_max if args.x_max is not None else float(node.get("safety.x_max_cm"))
+    if not x_min < x_max:
+        raise UsageError(f"--x-min {x_min:g} must be below --x-max {x_max:g}")
+    if x_max - x_min <= 2 * args.w1:
+        raise UsageError(f"the band {x_min:g}..{x_max:g} cm is not wider than 2 w1 = {2 * args.w1:g} cm (eq. 14)")
+    task = Task(w1_cm=args.w1, t_u_s=args.t_u, x_min_cm=x_min, x_max_cm=x_max, x_start_cm=args.x_start,
+                speed_cm_s=args.speed)
+    bar = commission_report.ProgressBar(sys.stderr) if not args.quiet and sys.stderr.isatty() else None
+    run = commission.Commissioning(node, task, progress=bar.update if bar else None, timeout_s=max(args.timeout, 1.0))
+    try:
+        result = run.run(apply=args.apply, save=args.save)
+    except (CommissionError, commission.CommissionAborted) as e:
+        if bar:
+            bar.close()
+        _err(f"error: commissioning of node {s.node_id} stopped: {e}; the node was left stopped and disarmed, "
+             "its parameters as they were")
+        return EXIT_REFUSED
+    except KeyboardInterrupt:
+        if bar:
+            bar.close()
+        _err(f"interrupted: node {s.node_id} was left stopped and disarmed, its parameters as they were")
+        return EXIT_INTERRUPTED
+    if bar:
+        bar.close()
+    for line in commission_report.text(result):
+        s.out(line)
+    if out_dir is not None:
+        for path in commission_report.write(result, out_dir, s.proto, node.node):
+            s.out(f"written: {path}")
+    return EXIT_OK
 
 
 def _err(text: str) -> None:

@@ -269,6 +269,9 @@ class PmaNode:
         # While set, every wait sends HOST_HEARTBEAT to the node this often (keeps a
         # RUNNING node from faulting with HOST_HEARTBEAT_LOST); None: never.
         self.host_heartbeat_s = host_heartbeat_s
+        # The time base of those heartbeats: the bus's own clock when it has one (a simulated
+        # bus in control time, hil/offline_bus.py), else the wall clock.
+        self.clock: Callable[[], float] = getattr(bus, "clock", time.monotonic)
         self._next_host_heartbeat = 0.0
         self._host_heartbeat_counter = 0
 
@@ -296,12 +299,12 @@ class PmaNode:
         """Sends HOST_HEARTBEAT when due; the time to the next one (None: off)."""
         if self.host_heartbeat_s is None:
             return None
-        now = time.monotonic()
+        now = self.clock()
         if now >= self._next_host_heartbeat:
             self.host_heartbeat(self._host_heartbeat_counter)
             self._host_heartbeat_counter = (self._host_heartbeat_counter + 1) & 0xFF
             self._next_host_heartbeat = now + self.host_heartbeat_s
-        return max(0.0, self._next_host_heartbeat - time.monotonic())
+        return max(0.0, self._next_host_heartbeat - self.clock())
 
     def receive(self, timeout_s: float | None = None) -> tuple[str, int, dict[str, Any], can.Message] | None:
         """The next frame of the protocol (any node) as (message, node, signals, raw).

@@ -144,7 +144,9 @@ class InfoCollector:
         if page != 0 and dev.protocol_version is not None and dev.protocol_version != self.my_version:
             dev.pages.add(page)  # received, not decoded: its layout may differ
             return
-        sig = self.msg.decode(data, decode_choices=False, scaling=False)
+        decoded = self.msg.decode(data, decode_choices=False, scaling=False)
+        assert isinstance(decoded, dict)        # not a container message
+        sig: dict[str, Any] = decoded
         dev.pages.add(page)
         if page == 0:
             if dev.protocol_version != self.my_version:

@@ -32,10 +32,9 @@ from __future__ import annotations
 import json
 import math
 import sys
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
-
-from dataclasses import dataclass, field
 
 from pmactl.protocol import Param, Protocol, param_table_hash, to_f32
 
@@ -57,7 +56,7 @@ class ParamFileError(ValueError):
 
 def _yaml() -> Any:
     try:
-        import yaml  # type: ignore[import-untyped]
+        import yaml
     except ImportError:
         return None
     return yaml

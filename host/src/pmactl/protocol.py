@@ -301,7 +301,7 @@ def param_table_hash(rows: Iterable[Mapping[str, Any]]) -> int:
     the table writes them; floats as float32), one line each, UTF-8."""
     lines = []
     for r in sorted(rows, key=lambda q: int(q["id"])):
-        def num(v: Any) -> str:
+        def num(v: Any, r: Any = r) -> str:
             return repr(to_f32(float(v))) if r["type"] == "f32" else str(int(v))
         lines.append(f"{int(r['id'])} {r['name']} {r['type']} {num(r['min'])} {num(r['max'])} "
                      f"{num(r['default'])}\n")

@@ -110,7 +110,7 @@ class Recording:
 
 def read_recording(path: str | Path) -> Recording:
     """Reads a recording CSV; RecordingError with the reason when it is not one."""
-    import numpy as np              # here: pmactl's start-up stays fast without it
+    import numpy as np  # here: pmactl's start-up stays fast without it
 
     path = Path(path)
     try:

@@ -15,11 +15,10 @@ from typing import Callable, Iterator
 
 import can
 import pytest
-
 from fwhost import CHANNEL, FW_HOST, PMACTL, Firmware, Run, pmactl_run
 from plant import PlantRig
-from pmactl import PmaNode, load_protocol
 
+from pmactl import PmaNode, load_protocol
 
 # pma-fw-host's software watchdog counts wall time (default 1 s). On a loaded machine
 # (the vcan guest has one CPU) a lockstep node can wait longer than that for the CPU;

@@ -15,8 +15,8 @@ from pathlib import Path
 
 import can
 import pytest
-
 from fwhost import CHANNEL, PMACTL, REPLY_TIMEOUT_S
+
 from pmactl.protocol import load_protocol
 
 PROTO = load_protocol()

@@ -21,7 +21,7 @@ BLOCK = re.compile(r"```console\n(.*?)```", re.S)
 
 
 def _clean(lines: list[str]) -> list[str]:
-    return [l for l in lines if not l.startswith("Matplotlib is building the font cache")]
+    return [line for line in lines if not line.startswith("Matplotlib is building the font cache")]
 
 
 def normalize(lines: list[str]) -> list[str]:
@@ -50,7 +50,7 @@ def normalize(lines: list[str]) -> list[str]:
 
 def session_stretch(session: list[str], block: list[str]) -> list[str]:
     """The transcript's lines from the block's first command to the end of its last."""
-    cmds = [l for l in block if l.startswith("$ ")]
+    cmds = [line for line in block if line.startswith("$ ")]
     assert cmds, block
     start = session.index(cmds[0])
     at = start
@@ -59,7 +59,7 @@ def session_stretch(session: list[str], block: list[str]) -> list[str]:
     end = at + 1
     while end < len(session) and not session[end].startswith("$ "):
         end += 1
-    assert [l for l in session[start:end] if l.startswith("$ ")] == cmds, (cmds, session[start:end])
+    assert [line for line in session[start:end] if line.startswith("$ ")] == cmds, (cmds, session[start:end])
     return session[start:end]
 
 

@@ -1,0 +1,251 @@
+# SPDX-License-Identifier: Apache-2.0
+"""`pmactl commission` (docs/commissioning.md): the derivation on synthetic data with known
+answers, and the procedure over CAN frames against the real firmware on the simulated rig
+(hil/offline_bus.py: python-can's bus API, libpma_offline.so behind it, no vcan): what it
+derives, what it refuses, and that it leaves the node as it found it.
+
+    .venv/bin/python -m pytest -q hil/tests/test_commission.py
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from hil import offline
+from hil import scenario as scn
+from hil.offline_bus import OfflineBus
+from pmactl import cli
+from pmactl.client import NodeStateError, PmaNode
+from pmactl.commission import TOUCHED, Commissioning
+from pmactl.commission_rules import (
+    CommissionError,
+    Measured,
+    StaticMap,
+    StepFit,
+    Task,
+    derive,
+    fit_step,
+    loop_margins,
+    mfac_phi1,
+)
+
+TASK = Task(w1_cm=0.2, t_u_s=2.0, x_min_cm=-3.0, x_max_cm=0.0, x_start_cm=-2.0)
+
+
+# ------------------------------------------------------------------ the rules --
+def test_fit_step_finds_a_known_fopdt():
+    rng = np.random.default_rng(1)
+    t = np.arange(0.0, 1.0, 1e-3)
+    gain, tau, theta, dp = -0.004, 0.05, 0.012, 40.0
+    x = -1.0 + gain * dp * np.where(t > theta, 1 - np.exp(-(t - theta) / tau), 0.0) + rng.normal(0, 2e-4, t.size)
+    f = fit_step(t, x, 300.0, dp)
+    assert f.gain_cm_per_kpa == pytest.approx(gain, rel=0.03)
+    assert f.tau_s == pytest.approx(tau, rel=0.1)
+    assert f.theta_s == pytest.approx(theta, abs=0.004)
+
+
+def test_fit_step_refuses_a_flat_or_short_record():
+    t = np.arange(0.0, 1.0, 1e-3)
+    with pytest.raises(CommissionError):
+        fit_step(t[:10], np.zeros(10), 300.0, 40.0)
+    with pytest.raises(CommissionError):
+        fit_step(t, np.zeros(t.size), 300.0, 40.0)
+
+
+def _map() -> StaticMap:
+    p = [100.0, 300.0, 500.0, 700.0, 900.0]
+    return StaticMap(p, [-0.2, -1.0, -1.6, -2.0, -2.4], p, [-0.3, -1.3, -1.9, -2.3, -2.4])
+
+
+def test_static_map_hold_pressure_is_between_the_branches():
+    m = _map()
+    assert m.hold_kpa(-1.3) == pytest.approx(0.5 * (400.0 + 300.0))
+    assert m.hysteresis_kpa(-1.3) == pytest.approx(100.0)
+    with pytest.raises(CommissionError, match="outside the measured stroke"):
+        m.hold_kpa(-2.9)
+
+
+def _measured(theta: float = 0.01, tau: float = 0.05) -> Measured:
+    steps = [StepFit(p, s * 40.0, -0.003, tau, theta, 0.0) for p in (300.0, 500.0, 700.0) for s in (1, -1)]
+    return Measured(polarity_measured=-1, noise_cm=0.001, static_map=_map(), steps=steps, period_s=1e-3,
+                    kpa_per_u=1.0, p_min_kpa=0.0, p_max_kpa=900.0)
+
+
+def test_derive_follows_the_rules():
+    d = derive(_measured(), TASK)
+    p = d.params
+    assert p["act.polarity"] == -1                     # x falls as the pressure rises
+    assert 0.0 < p["act.p0_kpa"] < 900.0
+    assert p["ctrl.u_min"] < 0.0 < p["ctrl.u_max"]
+    # u = polarity (p - p0): the range maps onto 0..900 kPa exactly
+    assert p["act.p0_kpa"] - p["ctrl.u_max"] == pytest.approx(0.0, abs=0.02)
+    assert p["act.p0_kpa"] - p["ctrl.u_min"] == pytest.approx(900.0, abs=0.02)
+    # SIMC: tau_c = theta_eff = theta + one period
+    f = d.figures
+    assert f["tau_c_s"] == pytest.approx(0.011)
+    assert f["kc_u_per_cm"] == pytest.approx(0.05 / (0.003 * 0.022), rel=1e-6)
+    assert p["ppc.w2_cm_s"] == pytest.approx(5.0 * p["ppc.a_cm_s"], rel=1e-3)
+    assert d.margins["phase_margin_deg"] > 45.0 and d.margins["gain_margin"] > 2.0
+    # the steady-state input at the start position, for the feedforward and MFAC
+    assert p["ppc.ff_init"] == p["mfac.u_init"]
+    # the synthetic map reaches -2.4 cm: the band's bottom is out of reach, and said so
+    assert len(d.warnings) == 1 and "measured stroke" in d.warnings[0]
+
+
+def test_derive_gains_fall_with_the_dead_time():
+    fast, slow = derive(_measured(theta=0.005), TASK), derive(_measured(theta=0.04), TASK)
+    assert slow.params["ppc.a_cm_s"] < fast.params["ppc.a_cm_s"]
+    assert slow.figures["kc_u_per_cm"] < fast.figures["kc_u_per_cm"]
+    # the margins are the rule's, whatever the lag
+    for d in (fast, slow):
+        assert 50.0 < d.margins["phase_margin_deg"] < 80.0
+
+
+def test_derive_says_what_the_task_cannot_have():
+    noisy = _measured()
+    noisy.noise_cm = 0.05
+    d = derive(noisy, Task(w1_cm=0.1, t_u_s=0.01, x_min_cm=-3.0, x_max_cm=0.0, speed_cm_s=100.0))
+    text = " ".join(d.warnings)
+    assert "noise" in text and "speed" in text and "t_u" in text
+    with pytest.raises(CommissionError, match="outside the measured stroke"):
+        derive(_measured(), Task(w1_cm=0.2, t_u_s=2.0, x_min_cm=-9.0, x_max_cm=-6.0))
+
+
+def test_loop_margins_of_a_known_loop():
+    # an integrator 10/s with a 0.05 s delay: crossover 10 rad/s, phase margin 90 - 28.6 deg
+    m = loop_margins(0.0, 10.0, 0.0, 1.0, 1e-9, 0.05)
+    assert m["crossover_rad_s"] == pytest.approx(10.0, rel=0.01)
+    assert m["phase_margin_deg"] == pytest.approx(90.0 - math.degrees(0.5), abs=0.5)
+
+
+def test_mfac_phi1_gives_the_integral_gain():
+    for ki in (1.0, 20.0, 100.0):
+        phi = mfac_phi1(ki)
+        gain = 31.7 * phi / (0.03 + phi * phi)
+        assert gain == pytest.approx(ki, rel=1e-6) or phi == pytest.approx(math.sqrt(0.03))
+
+
+# -------------------------------------------------------- over CAN, offline --
+@pytest.fixture
+def rig_node(request: pytest.FixtureRequest) -> Any:
+    """A freshly wired node on the paper's rig: its sensor and DAC scalings, the actuator's
+    pressure range and the constraints set, nothing else."""
+    assert offline.LIB_PATH.exists(), f"{offline.LIB_PATH} missing: {offline.BUILD_HINT}"
+    name = getattr(request, "param", "case3")
+    sc = scn.load(name)
+    bus = OfflineBus(sc.rig_params(), node_id=1)
+    node = PmaNode(bus, node=1, host_heartbeat_s=0.1)
+    wiring = sc.rig_params().firmware_scaling()
+    wiring.pop("act.p0_kpa")
+    proto = scn.protocol()
+    for k, v in wiring.items():
+        node.set(k, float(v) if proto.param(k).type == "f32" else int(round(v)))
+    for k in ("act.p_min_kpa", "act.p_max_kpa", "safety.x_min_cm", "safety.x_max_cm"):
+        node.set(k, sc.params[k])
+    bus.run_for(0.5)
+    yield bus, node
+    bus.shutdown()
+
+
+def _snapshot(node: PmaNode) -> dict[str, float | int]:
+    return {name: node.get(name) for name in TOUCHED}
+
+
+def test_commission_on_the_paper_rig(rig_node):
+    bus, node = rig_node
+    before = _snapshot(node)
+    r = Commissioning(node, TASK).run()
+    d = r.derivation
+    assert d.params["act.polarity"] == -1
+    lo, hi = r.measured.static_map.stroke_cm()
+    assert -3.0 + 0.1 <= lo < hi <= 0.0 - 0.1          # the sweep kept its margin from the constraints
+    assert r.rig_time_s < 60.0
+    assert d.margins["phase_margin_deg"] > 45.0
+    # without apply nothing changed, and the node is back in IDLE
+    assert _snapshot(node) == before
+    assert node.status().state_name == "IDLE"
+
+
+def test_commission_apply_sets_the_parameters(rig_node):
+    bus, node = rig_node
+    r = Commissioning(node, TASK).run(apply=True)
+    for name, value in r.derivation.params.items():
+        assert node.get(name) == pytest.approx(value, rel=1e-6, abs=1e-6)
+    assert r.applied and not r.saved
+
+
+def test_commission_refuses_a_node_that_is_not_idle(rig_node):
+    bus, node = rig_node
+    node.set("act.p0_kpa", 100.0)
+    node.set("ctrl.u_min", -100.0)
+    node.set("ctrl.u_max", 800.0)
+    node.arm()
+    with pytest.raises(NodeStateError, match="ARMED"):
+        Commissioning(node, TASK).run()
+    assert node.status().state_name == "ARMED"           # refused before anything was sent
+
+
+def test_commission_refuses_a_disconnected_sensor(rig_node):
+    bus, node = rig_node
+    bus.rig.break_wire(True)
+    bus.run_for(0.3)
+    before = _snapshot(node)
+    with pytest.raises(CommissionError, match="sensor"):
+        Commissioning(node, TASK).run()
+    assert _snapshot(node) == before
+
+
+def test_commission_refuses_an_actuator_that_does_not_move_the_muscle(rig_node):
+    bus, node = rig_node
+    bus.actuator_connected = False
+    before = _snapshot(node)
+    with pytest.raises(CommissionError, match="nothing moves"):
+        Commissioning(node, TASK).run()
+    assert _snapshot(node) == before
+    assert node.status().state_name == "IDLE"
+
+
+def test_commission_refuses_a_band_outside_the_stroke(rig_node):
+    bus, node = rig_node
+    with pytest.raises(CommissionError, match="constraint"):
+        Commissioning(node, Task(w1_cm=0.2, t_u_s=2.0, x_min_cm=-9.0, x_max_cm=-6.0)).run()
+    assert node.status().state_name == "IDLE"
+
+
+# ------------------------------------------------------------------ the CLI --
+@pytest.mark.parametrize("argv", [
+    ["commission", "--w1", "0.2", "--t-u", "2", "--save"],                         # --save without --apply
+    ["commission", "--w1", "-0.2", "--t-u", "2"],                                  # w1 not positive
+    ["commission", "--w1", "0.2", "--t-u", "nan"],
+    ["commission", "--w1", "2", "--t-u", "2", "--x-min", "-3", "--x-max", "0"],   # band narrower than 2 w1
+    ["commission", "--w1", "0.2", "--t-u", "2", "--x-min", "0", "--x-max", "-3"],
+    ["commission", "--t-u", "2"],
+])
+def test_cli_refuses_bad_options_before_sending(rig_node, monkeypatch, argv):
+    bus, node = rig_node
+    monkeypatch.setattr(cli, "open_bus", lambda cfg: bus)
+    sent: list[Any] = []
+    monkeypatch.setattr(bus, "send", lambda msg, timeout=None: sent.append(msg))
+    assert cli.main(["--node", "1", *argv]) == cli.EXIT_USAGE
+    assert not [m for m in sent if (m.arbitration_id & 0x7F0) in (0x040, 0x070)]   # no COMMAND, no SET
+
+
+def test_cli_commission_writes_its_report(rig_node, monkeypatch, tmp_path: Path, capsys):
+    bus, node = rig_node
+    monkeypatch.setattr(cli, "open_bus", lambda cfg: bus)
+    monkeypatch.setattr(bus, "shutdown", lambda: None)
+    code = cli.main(["--node", "1", "commission", "--w1", "0.2", "--t-u", "2", "--x-start", "-2",
+                     "--out", str(tmp_path), "--quiet"])
+    out = capsys.readouterr().out
+    assert code == cli.EXIT_OK, out
+    assert "phase margin" in out and "nothing changed on the node" in out
+    for f in ("report.json", "params.json", "commissioning.png"):
+        assert (tmp_path / f).exists()
+    # the parameter file loads with pmactl's own reader
+    from pmactl import paramfile
+    entries = paramfile.load(str(tmp_path / "params.json"), scn.protocol())
+    assert {p.name for p, _ in entries} >= {"act.polarity", "act.p0_kpa", "ppc.a_cm_s", "mfac.phi1"}

@@ -1,0 +1,285 @@
+# SPDX-License-Identifier: Apache-2.0
+"""The derivation of `pmactl commission`: pure functions from what was measured on the rig to
+the controllers' parameters (docs/commissioning.md, "The rules"). No CAN, no node: the
+procedure (pmactl/commission.py) measures, these functions decide.
+
+Units: positions x in cm, pressures p in kPa (gauge), times in s, the controller's input u in
+its unit (u = polarity * (p - p0) / act.kpa_per_u).
+
+The model the rules use is the one a step response shows on any such rig: around an operating
+point the position follows the pressure like a first-order lag with a dead time (FOPDT),
+x(s) / p(s) = g e^{-theta s} / (tau s + 1), with g in cm/kPa, fitted by the two-point method
+(the times to 35.3 % and 85.3 % of the step). The loop is then shaped by the SIMC rule
+(Skogestad 2003) with the closed-loop time constant tau_c = theta_eff: a PI equivalent
+Kc, tau_I, which the paper's law realises in its small-signal form
+u = -K_v ((x' - x_r') + K_p e) plus the steady-state feedforward integrator
+(u_ff' = k_ff u_law), i.e. the PID  K_v (K_p + k_ff) + K_v s + K_v K_p k_ff / s.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+# two-point FOPDT fit (Sundaresan & Krishnaswamy 1978)
+FIT_LOW, FIT_HIGH = 0.353, 0.853
+TAU_C_PER_THETA = 1.0        # SIMC's closed-loop time constant tau_c = theta_eff ("tight control, good robustness")
+FF_PER_KP = 10.0             # the feedforward integrator's gain k_ff in units of K_p
+W2_PER_A = 5.0               # lambda2's barrier at 5 a: theta = a tan(pi r / 2) reaches it at r = 0.87
+NOISE_SIGMAS_IN_W1 = 6.0     # w1 must hold 6 standard deviations of the position noise
+MFAC_ETA, MFAC_MU, MFAC_RHO, MFAC_LAMBDA = 0.5, 1.9, 31.7, 0.03   # the paper's MFAC gains
+
+
+class CommissionError(ValueError):
+    """The measurements do not allow a derivation (the message says what to check)."""
+
+
+@dataclass
+class StepFit:
+    """One step response: x(t) after a pressure step of dp_kpa at t = 0."""
+    p_kpa: float            # the pressure before the step
+    dp_kpa: float
+    gain_cm_per_kpa: float  # dx / dp, signed
+    tau_s: float
+    theta_s: float
+    rms_cm: float           # fit residual
+
+
+@dataclass
+class StaticMap:
+    """x(p) along a pressure sweep up and down (both branches of the hysteresis)."""
+    p_up_kpa: list[float]
+    x_up_cm: list[float]
+    p_down_kpa: list[float]
+    x_down_cm: list[float]
+
+    def all_x(self) -> list[float]:
+        return self.x_up_cm + self.x_down_cm
+
+    def stroke_cm(self) -> tuple[float, float]:
+        xs = self.all_x()
+        return min(xs), max(xs)
+
+    def hold_kpa(self, x_cm: float) -> float:
+        """The pressure that holds x: the middle of the two branches (linear between points;
+        at a branch's end, its end). CommissionError outside the stroke."""
+        self._check(x_cm)
+        return 0.5 * (_interp_p(self.p_up_kpa, self.x_up_cm, x_cm) + _interp_p(self.p_down_kpa, self.x_down_cm, x_cm))
+
+    def hysteresis_kpa(self, x_cm: float) -> float:
+        self._check(x_cm)
+        return abs(_interp_p(self.p_up_kpa, self.x_up_cm, x_cm) - _interp_p(self.p_down_kpa, self.x_down_cm, x_cm))
+
+    def _check(self, x_cm: float) -> None:
+        lo, hi = self.stroke_cm()
+        if not lo <= x_cm <= hi:
+            raise CommissionError(f"x = {x_cm:.3f} cm lies outside the measured stroke {lo:.3f}..{hi:.3f} cm")
+
+
+def _interp_p(p: list[float], x: list[float], x_cm: float) -> float:
+    """p at x on one branch (sorted by x; beyond its ends, its end)."""
+    order = np.argsort(x)
+    return float(np.interp(x_cm, np.asarray(x, float)[order], np.asarray(p, float)[order]))
+
+
+def fit_step(t_s: np.ndarray, x_cm: np.ndarray, p_kpa: float, dp_kpa: float) -> StepFit:
+    """FOPDT of one step response (t from the step, x measured; the first samples before the
+    response moves give the start value, the last 20 % the end value)."""
+    t = np.asarray(t_s, float)
+    x = np.asarray(x_cm, float)
+    if len(t) < 20 or t[-1] <= 0:
+        raise CommissionError("a step response needs at least 20 samples after the step")
+    x0 = float(np.mean(x[: max(3, len(x) // 50)]))
+    x1 = float(np.mean(x[int(0.8 * len(x)):]))
+    dx = x1 - x0
+    if dp_kpa == 0 or dx == 0:
+        raise CommissionError("the step moved nothing")
+    y = (x - x0) / dx                       # 0 .. 1
+    t_low, t_high = _first_crossing(t, y, FIT_LOW), _first_crossing(t, y, FIT_HIGH)
+    tau = max(0.67 * (t_high - t_low), 1e-4)
+    theta = max(1.3 * t_low - 0.29 * t_high, 0.0)
+    model = np.where(t > theta, 1.0 - np.exp(-(t - theta) / tau), 0.0)
+    rms = float(np.sqrt(np.mean((y - model) ** 2)) * abs(dx))
+    return StepFit(p_kpa=p_kpa, dp_kpa=dp_kpa, gain_cm_per_kpa=dx / dp_kpa, tau_s=tau, theta_s=theta, rms_cm=rms)
+
+
+def _first_crossing(t: np.ndarray, y: np.ndarray, level: float) -> float:
+    above = np.nonzero(y >= level)[0]
+    if len(above) == 0:
+        raise CommissionError(f"the step response never reached {100 * level:.0f} % of its end value: "
+                              "hold each step longer")
+    i = int(above[0])
+    if i == 0:
+        return float(t[0])
+    # linear between the samples around the crossing
+    return float(t[i - 1] + (level - y[i - 1]) / (y[i] - y[i - 1]) * (t[i] - t[i - 1]))
+
+
+@dataclass
+class Task:
+    """What the user asks for: the accuracy w1 after t_u, the output constraints."""
+    w1_cm: float
+    t_u_s: float
+    x_min_cm: float
+    x_max_cm: float
+    x_start_cm: float | None = None   # where the reference starts (default: the band's middle)
+    speed_cm_s: float = 0.0           # the reference's largest speed (0: a set-point task)
+
+
+@dataclass
+class Measured:
+    polarity_measured: int              # sign of dx/dp
+    noise_cm: float                     # standard deviation at rest
+    static_map: StaticMap
+    steps: list[StepFit]
+    period_s: float
+    kpa_per_u: float
+    p_min_kpa: float
+    p_max_kpa: float
+
+
+@dataclass
+class Derivation:
+    params: dict[str, float | int]
+    figures: dict[str, float]
+    margins: dict[str, float]
+    promises: list[str] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
+
+    def as_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+def loop_margins(kc: float, ki: float, kd: float, gain: float, tau_s: float, theta_s: float) -> dict[str, float]:
+    """Phase margin [deg], gain margin [-], crossover [rad/s] and delay margin [s] of the PID
+    kc + kd s + ki / s on the FOPDT gain e^{-theta s} / (tau s + 1), on a frequency grid."""
+    w = np.logspace(-2, 5, 20000)
+    s = 1j * w
+    loop = (kc + kd * s + ki / s) * gain * np.exp(-theta_s * s) / (tau_s * s + 1.0)
+    mag = np.abs(loop)
+    phase = np.unwrap(np.angle(loop))
+    cross = np.nonzero((mag[:-1] >= 1.0) & (mag[1:] < 1.0))[0]
+    if len(cross) == 0:
+        return {"phase_margin_deg": math.nan, "gain_margin": math.nan, "crossover_rad_s": math.nan,
+                "delay_margin_s": math.nan}
+    i = int(cross[-1])
+    wc = float(w[i])
+    pm = float(math.degrees(phase[i]) + 180.0)
+    while pm > 180.0:
+        pm -= 360.0
+    pc = np.nonzero((phase[:-1] > -math.pi) & (phase[1:] <= -math.pi))[0]
+    gm = float(1.0 / mag[int(pc[0])]) if len(pc) else math.inf
+    return {"phase_margin_deg": pm, "gain_margin": gm, "crossover_rad_s": wc,
+            "delay_margin_s": math.radians(pm) / wc if wc > 0 else math.nan}
+
+
+def mfac_phi1(ki_per_tick: float, rho: float = MFAC_RHO, lam: float = MFAC_LAMBDA) -> float:
+    """MFAC's phi(1) whose step gain rho phi / (lambda + phi^2) equals the loop's integral gain
+    per tick (the smaller root: MFAC starts gentle; at most sqrt(lambda), its largest gain)."""
+    if ki_per_tick <= 0:
+        raise CommissionError("the integral gain must be positive")
+    disc = rho * rho - 4.0 * ki_per_tick * ki_per_tick * lam
+    if disc <= 0:
+        return math.sqrt(lam)
+    return (rho - math.sqrt(disc)) / (2.0 * ki_per_tick)
+
+
+def derive(m: Measured, task: Task) -> Derivation:
+    """The parameters for the paper's controller and MFAC on this rig and task (module doc)."""
+    if not m.steps:
+        raise CommissionError("no step response")
+    if task.w1_cm <= 0 or task.t_u_s <= 0 or task.x_min_cm >= task.x_max_cm:
+        raise CommissionError("the task needs w1 > 0, t_u > 0 and x_min < x_max")
+    lo, hi = m.static_map.stroke_cm()
+    band_lo, band_hi = task.x_min_cm + task.w1_cm, task.x_max_cm - task.w1_cm
+    if band_hi <= lo or band_lo >= hi:
+        raise CommissionError(f"the task's band {task.x_min_cm:g}..{task.x_max_cm:g} cm (minus w1) lies outside "
+                              f"the measured stroke {lo:.3f}..{hi:.3f} cm")
+    warnings: list[str] = []
+    reach_lo, reach_hi = max(band_lo, lo), min(band_hi, hi)
+    if reach_lo > band_lo or reach_hi < band_hi:
+        warnings.append(f"only {reach_lo:.3f}..{reach_hi:.3f} cm of the band {band_lo:.3f}..{band_hi:.3f} cm "
+                        "(the constraints minus w1) is within the measured stroke: references outside it "
+                        "cannot be tracked")
+    polarity = 1 if m.polarity_measured > 0 else -1
+    x_mid = 0.5 * (reach_lo + reach_hi)
+    x_start = x_mid if task.x_start_cm is None else min(max(task.x_start_cm, reach_lo), reach_hi)
+    p0 = m.static_map.hold_kpa(x_mid)
+
+    # the plant as the controller sees it: u in its unit, dx/du > 0 with the derived polarity
+    gain = float(np.median([abs(s.gain_cm_per_kpa) for s in m.steps])) * m.kpa_per_u   # cm per input unit
+    # the median of the six steps (three operating points, up and down): one step through the
+    # hysteresis' dead band shows a late, slow response that is not the loop's
+    tau = float(np.median([s.tau_s for s in m.steps]))
+    theta = float(np.median([s.theta_s for s in m.steps]))
+    theta_eff = theta + m.period_s             # one sample of the loop's own delay
+    tau_c = TAU_C_PER_THETA * theta_eff
+    kc = tau / (gain * (tau_c + theta_eff))
+    tau_i = min(tau, 4.0 * (tau_c + theta_eff))
+    ki = kc / tau_i
+    # the paper's law in small-signal form, K_v ((1 + r) K_p + s + r K_p^2 / s) with k_ff = r K_p:
+    # the PI's Kc and Ki, and a derivative (K_v) r + 1 times smaller than Kc / K_p
+    r = FF_PER_KP
+    k_p = (1.0 + r) / (r * tau_i)
+    k_v = kc / ((1.0 + r) * k_p)
+    a = 2.0 * task.w1_cm * k_p / math.pi
+    w2 = W2_PER_A * a
+    c = 2.0 * w2 * w2 * k_v / math.pi
+    margins = loop_margins(k_v * (1.0 + r) * k_p, k_v * r * k_p * k_p, k_v, gain, tau, theta_eff)
+    wc = margins["crossover_rad_s"] if math.isfinite(margins["crossover_rad_s"]) else 1.0 / (tau_c + theta_eff)
+    fc_hz = min(max(4.0 * wc / (2.0 * math.pi), 2.0), 50.0)
+
+    u_of = lambda p: polarity * (p - p0) / m.kpa_per_u
+    u_lo, u_hi = sorted((u_of(m.p_min_kpa), u_of(m.p_max_kpa)))
+    u_start = u_of(m.static_map.hold_kpa(x_start))
+    phi1 = mfac_phi1(ki * m.period_s)
+
+    w1_min = NOISE_SIGMAS_IN_W1 * m.noise_cm
+    promises = [f"|e| < w1 = {task.w1_cm:g} cm needs w1 >= {w1_min:.4f} cm for this sensor's noise "
+                f"({NOISE_SIGMAS_IN_W1:g} x {m.noise_cm:.5f} cm)"]
+    v_max = task.w1_cm / (2.0 * (tau_c + theta_eff))
+    promises.append(f"the loop's lag tau_c + theta = {1000 * (tau_c + theta_eff):.1f} ms: w1 holds for references "
+                    f"slower than about {v_max:.2f} cm/s")
+    t_u_min = 4.0 * (tau_c + theta_eff)
+    if task.w1_cm < w1_min:
+        warnings.append(f"the requested w1 = {task.w1_cm:g} cm is below what the noise allows ({w1_min:.4f} cm): "
+                        "the guarantee cannot hold; ask for a larger w1 or filter the sensor")
+    if task.speed_cm_s > v_max:
+        warnings.append(f"the reference's speed {task.speed_cm_s:g} cm/s exceeds {v_max:.2f} cm/s: expect |e| "
+                        "near w1 and a loss of the guarantee (the fallback to MFAC takes over)")
+    if task.t_u_s < t_u_min:
+        warnings.append(f"t_u = {task.t_u_s:g} s is shorter than 4 (tau_c + theta) = {t_u_min:.3f} s: the error may "
+                        "not have entered the band by then")
+    hold_hyst = m.static_map.hysteresis_kpa(x_mid)
+    params: dict[str, float | int] = {
+        "act.polarity": polarity,
+        "act.p0_kpa": round(p0, 2),
+        "ctrl.u_min": round(u_lo, 2),
+        "ctrl.u_max": round(u_hi, 2),
+        "ppc.w1_cm": task.w1_cm,
+        "ppc.t_u_s": task.t_u_s,
+        "ppc.a_cm_s": round(a, 4),
+        "ppc.w2_cm_s": round(w2, 4),
+        "ppc.c": round(c, 4),
+        "ppc.ff_gain_per_s": round(r * k_p, 3),
+        "ppc.ff_init": round(u_start, 2),
+        "ppc.ref_vel": 1,
+        "ppc.obs_pos": 1,
+        "vel.kind": 1,
+        "vel.fc_hz": round(fc_hz, 2),
+        "mfac.eta": MFAC_ETA,
+        "mfac.mu": MFAC_MU,
+        "mfac.rho": MFAC_RHO,
+        "mfac.lambda": MFAC_LAMBDA,
+        "mfac.phi1": round(phi1, 5),
+        "mfac.u_init": round(u_start, 2),
+        "safety.x_min_cm": task.x_min_cm,
+        "safety.x_max_cm": task.x_max_cm,
+    }
+    figures = {"gain_cm_per_u": gain, "tau_s": tau, "theta_s": theta, "theta_eff_s": theta_eff, "tau_c_s": tau_c,
+               "noise_cm": m.noise_cm, "stroke_min_cm": lo, "stroke_max_cm": hi, "hysteresis_kpa_at_p0": hold_hyst,
+               "kc_u_per_cm": kc, "tau_i_s": tau_i, "k_p_per_s": k_p, "k_v_u_per_cm_s": k_v, "w1_min_cm": w1_min,
+               "v_max_cm_s": v_max, "t_u_min_s": t_u_min}
+    return Derivation(params=params, figures=figures, margins=margins, promises=promises, warnings=warnings)
