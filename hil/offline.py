@@ -604,6 +604,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", metavar="DIR", help="write summary.json and signals.npz (per variant: DIR/variant_NN)")
     p.add_argument("--json", metavar="FILE", help="write every variant's summary to FILE (a JSON list)")
     p.add_argument("--brief", action="store_true", help="the sweep table only, not each variant's report")
+    p.add_argument("--commission", action="store_true",
+                   help="the ppc lane on the set `pmactl commission` derives on each variant's rig (over CAN "
+                        "frames, offline) plus the task's w1 and t_u, instead of the file's set "
+                        "(docs/commissioning.md); what was measured and derived goes into the summary")
 
 
 def main(args: argparse.Namespace) -> int:
@@ -638,13 +642,40 @@ def main(args: argparse.Namespace) -> int:
         print(f"hil offline: {e}", file=sys.stderr)
         return 3
     out = Path(args.out) if args.out else None
+    runs = [v.scenario for v in variants]
+    commissionings: list[Any] = []
+    if getattr(args, "commission", False):
+        from pmactl.commission import CommissionAborted
+        from pmactl.commission_rules import CommissionError
+
+        from .commissioned import commission, commissioned
+        if not any(c.label == "ppc" for c in sc.controllers):
+            print(f"hil offline: --commission: {sc.name} has no ppc lane", file=sys.stderr)
+            return 2
+        try:
+            for i, v in enumerate(runs):
+                r = commission(v)
+                commissionings.append(r)
+                runs[i] = commissioned(v, r)
+        except (CommissionError, CommissionAborted) as e:
+            print(f"hil offline: commissioning refused: {e}", file=sys.stderr)
+            return 1
     try:
-        summaries = run_scenarios([v.scenario for v in variants], args.quick, args.jobs, out)
+        summaries = run_scenarios(runs, args.quick, args.jobs, out)
     except ParamError as e:
         print(f"hil offline: {e}", file=sys.stderr)
         return 2
-    for var, s in zip(variants, summaries):
+    for k, (var, s) in enumerate(zip(variants, summaries)):
         s["variant"] = var.settings
+        if commissionings:
+            s["commissioning"] = jsonable(commissionings[k].report())
+            if not args.brief:
+                from pmactl.commission_report import text as commission_text
+                print("\n".join(commission_text(commissionings[k])))
+            if out is not None:
+                vout = out if len(variants) == 1 else out / f"variant_{k:02d}"
+                vout.mkdir(parents=True, exist_ok=True)
+                (vout / "commissioning.json").write_text(json.dumps(s["commissioning"], indent=2) + "\n")
         if not args.brief:
             if var.label:
                 print(f"\n#### {var.label}")

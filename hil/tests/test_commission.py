@@ -249,3 +249,17 @@ def test_cli_commission_writes_its_report(rig_node, monkeypatch, tmp_path: Path,
     from pmactl import paramfile
     entries = paramfile.load(str(tmp_path / "params.json"), scn.protocol())
     assert {p.name for p, _ in entries} >= {"act.polarity", "act.p0_kpa", "ppc.a_cm_s", "mfac.phi1"}
+
+
+def test_hil_offline_runs_the_ppc_lane_on_the_commissioned_set(tmp_path: Path, capsys):
+    from hil.__main__ import main as hil_main
+    code = hil_main(["offline", "case3", "--controller", "ppc", "--duration", "8", "--commission", "--brief",
+                     "--out", str(tmp_path)])
+    out = capsys.readouterr().out
+    assert code == 0, out
+    import json
+    rep = json.loads((tmp_path / "commissioning.json").read_text())
+    assert rep["derivation"]["params"]["act.polarity"] == -1
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["controllers"]["ppc"]["params_set"]["ppc.a_cm_s"] == pytest.approx(
+        rep["derivation"]["params"]["ppc.a_cm_s"])
