@@ -176,15 +176,19 @@ def test_non_zero_arg_is_accepted_and_echoed(firmware, bus) -> None:
 
 
 def test_status_values_are_readable(firmware, bus) -> None:
-    """docs/protocol.md "Status values": every Id 1..7 answers U32 with Result 0 (any request
-    Type); another Id UNKNOWN_ID; FRAMES_BAD counts a frame of the wrong length."""
+    """docs/protocol.md "Status values": every Id 1..10 answers U32 with Result 0 (any request
+    Type); another Id UNKNOWN_ID; FRAMES_BAD counts a frame of the wrong length; before any
+    START the guarantee monitor's values say "held" (0 lost ticks, time 0xFFFFFFFF)."""
     fw, node = start(firmware, bus, node=NODE)
-    for sid in range(1, 8):
+    for sid in range(1, 11):
         for t in (0, 1, 2, 7):
             r = raw_reply(bus, param_raw(GET_STATUS, t, sid))
             assert r[0] == (1 << 4 | GET_STATUS) and r[3] == 0, (sid, t, r.hex())
-    for sid in (0, 8, 999):
+    for sid in (0, 11, 999):
         assert raw_reply(bus, param_raw(GET_STATUS, 1, sid))[3] == 0xEE
+    assert int.from_bytes(raw_reply(bus, param_raw(GET_STATUS, 1, 8))[4:], "little") == 0
+    assert int.from_bytes(raw_reply(bus, param_raw(GET_STATUS, 1, 9))[4:], "little") == 0xFFFFFFFF
+    assert int.from_bytes(raw_reply(bus, param_raw(GET_STATUS, 1, 10))[4:], "little") == 0
     bad = int.from_bytes(raw_reply(bus, param_raw(GET_STATUS, 1, 5))[4:], "little")
     raw_reply(bus, bytes([0x00, 0x05]))                    # a 2-byte PARAM_REQ: LENGTH
     assert int.from_bytes(raw_reply(bus, param_raw(GET_STATUS, 1, 5))[4:], "little") == bad + 1
