@@ -89,9 +89,6 @@ def test_tuning_session(firmware, plant, tmp_path: Path) -> None:
     run("params", "list", "ppc")
     run("reference", "case1")
     run("params", "set", "ppc.w1_cm", "0.3")
-    # the session tunes the paper's law itself: no hand-over to MFAC, whose gains are not set
-    # for this plant (docs/tuning.md)
-    run("params", "set", "ppc.fallback", "0")
 
     def trial(name: str, quiet: bool = True, armed: Callable[[], None] | None = None) -> dict[str, float]:
         # Every trial starts alike, whatever the machine's speed: from rest (IDLE: the rig holds
