@@ -12,6 +12,17 @@
         if (rc_ != PMA_OK) return rc_;  \
     } while (0)
 
+/* MFAC's reference of the next sample, y*(k+1); STREAM's next value is not known yet: this
+ * sample's. */
+static float next_reference(const pma_ctrl_t *s, float t_s)
+{
+    float xr_next;
+    if (pma_ref_value_f32(&s->ref_cfg, t_s + s->period_s, &xr_next, NULL) != PMA_OK) {
+        xr_next = s->out.xr_cm;
+    }
+    return xr_next;
+}
+
 static float clampf(float v, float lo, float hi)
 {
     return v < lo ? lo : (v > hi ? hi : v);
@@ -117,13 +128,10 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
     float out = 0.0f;
     switch (s->mode) {
     case PMA_CTRL_MODE_PPC: {
-        /* the fallback MFAC's reference of the next sample, as in mode MFAC */
-        float xr_next;
-        if (pma_ref_value_f32(&s->ref_cfg, t_s + s->period_s, &xr_next, NULL) != PMA_OK) {
-            xr_next = o->xr_cm;
-        }
         float u_mfac = 0.0f;
-        if (s->fallback_mode) CHECK(pma_mfac_step_f32(&s->shadow, x_cm, xr_next, &u_mfac));
+        if (s->fallback_mode) {
+            CHECK(pma_mfac_step_f32(&s->shadow, x_cm, next_reference(s, t_s), &u_mfac));
+        }
         if (!s->fallback_active) {
             /* the options (controller.h) choose the law's inputs */
             const float x_law_cm = s->ppc_obs_pos ? s->vel.xh : x_cm;
@@ -154,11 +162,7 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
     }
     case PMA_CTRL_MODE_MFAC: {
         /* MFAC's law uses the reference of the next sample, y*(k+1) */
-        float xr_next;
-        if (pma_ref_value_f32(&s->ref_cfg, t_s + s->period_s, &xr_next, NULL) != PMA_OK) {
-            xr_next = o->xr_cm; /* STREAM: the next value is not known yet */
-        }
-        CHECK(pma_mfac_step_f32(&s->c.mfac, x_cm, xr_next, &out));
+        CHECK(pma_mfac_step_f32(&s->c.mfac, x_cm, next_reference(s, t_s), &out));
         o->flags = s->c.mfac.flags;
         o->internal1 = s->c.mfac.phi;
         o->internal2 = s->c.mfac.u1;

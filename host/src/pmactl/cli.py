@@ -116,34 +116,27 @@ def _node_list(text: str) -> list[int]:
         raise argparse.ArgumentTypeError(str(e)) from None
 
 
-def _positive(text: str) -> float:
+def _at_least(text: str, low: float, strict: bool, what: str) -> float:
+    """A finite number above low (strict) or at least low; argparse's error names `what`."""
     try:
         v = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not (math.isfinite(v) and v > 0):
-        raise argparse.ArgumentTypeError(f"{text} is not a positive number of seconds")
+    if not (math.isfinite(v) and (v > low if strict else v >= low)):
+        raise argparse.ArgumentTypeError(f"{text} is not {what}")
     return v
+
+
+def _positive(text: str) -> float:
+    return _at_least(text, 0.0, True, "a positive number of seconds")
 
 
 def _positive_value(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not (math.isfinite(v) and v > 0):
-        raise argparse.ArgumentTypeError(f"{text} is not a positive number")
-    return v
+    return _at_least(text, 0.0, True, "a positive number")
 
 
 def _nonnegative(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not (math.isfinite(v) and v >= 0):
-        raise argparse.ArgumentTypeError(f"{text} is not a number >= 0")
-    return v
+    return _at_least(text, 0.0, False, "a number >= 0")
 
 
 def _count(text: str) -> int:

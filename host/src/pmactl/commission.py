@@ -116,7 +116,7 @@ class Commissioning:
             self._clamp_to_ranges(derivation)
             ok = True
         finally:
-            self._safe(restore=True, quiet=not ok)
+            self._safe(quiet=not ok)
         applied = saved = False
         if apply:
             for name, value in _apply_order(derivation.params):
@@ -302,9 +302,6 @@ class Commissioning:
             return x <= self.task.x_min_cm + self.margin_cm
         return False
 
-    def _near_limits(self, rec: Recording) -> bool:
-        return any(self._beyond(x) for x in rec.x_cm[-len(rec.x_cm) // 3:])
-
     def _wait_s(self, seconds: float) -> float:
         self._next_row()
         t_end = self.t_now + seconds
@@ -337,7 +334,7 @@ class Commissioning:
         raise CommissionAborted(f"no telemetry from node {self.node.node} for {self.timeout_s:g} s: the node or the "
                                 "bus is lost")
 
-    def _safe(self, restore: bool, quiet: bool) -> None:
+    def _safe(self, quiet: bool) -> None:
         """STOP and DISARM (the node vents or holds as safety.safe_mode says), then the touched
         parameters back. On the way out after an error nothing here may hide that error."""
         node = self.node
@@ -347,13 +344,12 @@ class Commissioning:
             except (NoReply, OSError):
                 if not quiet:
                     raise
-        if restore:
-            for name, value in self.saved.items():
-                try:
-                    node.set(name, value)
-                except Exception:
-                    if not quiet:
-                        raise
+        for name, value in self.saved.items():
+            try:
+                node.set(name, value)
+            except Exception:
+                if not quiet:
+                    raise
 
 
 def _apply_order(params: dict[str, float | int]) -> list[tuple[str, float | int]]:
