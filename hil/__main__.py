@@ -2,7 +2,7 @@
 """python -m hil: run HIL scenarios against pma-fw-host (or a board) over CAN.
 
     python -m hil list
-    python -m hil run SCENARIO --out DIR [--quick] [--interface I --channel C --bitrate B]
+    python -m hil run SCENARIO --out DIR [--quick] [--commission] [--interface I --channel C --bitrate B]
     python -m hil report DIR [DIR ...]
     python -m hil bench [--seconds S]
     python -m hil offline SCENARIO [--quick] [--controller L] [--set N=V] [--rig P=V] [--grid N=V1,V2] [--jobs N]
@@ -103,6 +103,14 @@ def cmd_run(args: argparse.Namespace, argv: list[str]) -> int:
                   f"(it has {', '.join(c.label for c in sc.controllers)})", file=sys.stderr)
             return 2
         sc.controllers = keep
+    needs = sc.needs_commissioning()
+    if needs and not args.commission:
+        print(f"hil: {sc.name}: lane(s) {', '.join(needs)} take their set from commissioning: add --commission "
+              "(or choose other lanes with --controller)", file=sys.stderr)
+        return 2
+    if args.commission and not needs:
+        print(f"hil: --commission: {sc.name} has no lane with commission = true", file=sys.stderr)
+        return 2
     if args.board and len(sc.controllers) != 1:
         print("hil: --board drives one node: choose one controller with --controller LABEL", file=sys.stderr)
         return 2
@@ -113,7 +121,7 @@ def cmd_run(args: argparse.Namespace, argv: list[str]) -> int:
     if _needs_guest(cfg):
         return _rerun_in_guest(argv, out)
     opts = RunOptions(out=out, quick=args.quick, bus_config=cfg, board=args.board, board_node=args.node,
-                      log_format=args.log_format, progress=not args.no_progress)
+                      log_format=args.log_format, progress=not args.no_progress, commission=args.commission)
     # Ctrl-C and SIGTERM stop the run cleanly (even when started with SIGINT ignored,
     # as background jobs of a non-interactive shell are)
     signal.signal(signal.SIGINT, signal.default_int_handler)
@@ -178,6 +186,10 @@ def main(argv: list[str] | None = None) -> int:
     r.add_argument("--out", required=True, help="output directory (summary.json, signals.npz, bus log, figures)")
     r.add_argument("--quick", action="store_true", help="the scenario's short variant (quick_duration_s)")
     r.add_argument("--controller", action="append", metavar="LABEL", help="run only this controller (repeatable)")
+    r.add_argument("--commission", action="store_true",
+                   help="before ARM, run `pmactl commission` over CAN on the node of each lane with "
+                        "commission = true (ppc, mfac), on its own rig, and run the lane on the derived set plus "
+                        "the task's own parameters; what was measured and derived goes into summary.json")
     can_opts(r)
     r.add_argument("--board", action="store_true",
                    help="drive an external node (a board) in real time instead of starting pma-fw-host")

@@ -1,13 +1,14 @@
 # SPDX-License-Identifier: Apache-2.0
-"""A scenario's paper-controller lane with the parameters `pmactl commission` derives on the
-scenario's own rig, instead of the hand-tuned set in its file.
+"""Lanes whose parameter set comes from `pmactl commission` on the lane's own rig.
 
-`commission(sc)` runs the real procedure (pmactl.commission, over python-can frames) against
-the real firmware on the scenario's rig (hil/offline_bus.py), as a user would on a freshly
-wired rig: the node knows only the rig's sensor and DAC scalings, the actuator's pressure
-range and the constraints. `commissioned(sc, derivation)` is the scenario with its `ppc` lane
-set from the derivation plus only the task's own w1 and t_u (and its reference, constraints
-and events as the file has them).
+A scenario's lane with `commission = true` (hil/scenario.py) gives only the task's own
+parameters (w1, t_u, the band check); before ARM the harness runs the real procedure
+(pmactl.commission, over python-can frames) on that lane's fresh node, as a user would on a
+freshly wired rig: the node knows only the rig's sensor and DAC scalings, the actuator's
+pressure range and the constraints (`before_commissioning`). Over CAN, `python -m hil run
+--commission` does that on each lane's node (hil/runner.py); offline, `commission(sc)` does it
+against the real firmware on the scenario's rig through hil/offline_bus.py, and
+`commissioned(sc, result)` is the scenario with every such lane on the derived set.
 """
 from __future__ import annotations
 
@@ -22,57 +23,94 @@ from pmactl.commission_rules import Task
 
 from .offline_bus import OfflineBus
 from .reference import reference_function
-from .scenario import Scenario, protocol
+from .scenario import COMMISSION_TASK_PARAMS, COMMISSIONED_NODE_WIDE, Controller, Scenario, protocol
 
 # the rig's wiring and the user's limits: what a freshly wired node knows before commissioning
 USER_LIMITS = ("act.p_min_kpa", "act.p_max_kpa", "safety.x_min_cm", "safety.x_max_cm")
-# what the derivation sets on the node (the rest of its output are the task's or MFAC's)
-NODE_WIDE = ("act.polarity", "act.p0_kpa", "ctrl.u_min", "ctrl.u_max")
+# the derived parameters a lane takes, by its mode (the PPC's fallback is MFAC: it takes MFAC's)
+DERIVED_BY_MODE = {"PPC": ("ppc.", "vel.", "mfac."), "MFAC": ("mfac.",)}
 
 
-def task_of(sc: Scenario, label: str = "ppc") -> Task:
-    """The task of the scenario's lane: its w1, t_u, constraints, where its reference starts and
-    how fast it gets (over the scenario's run)."""
-    ctrl = next(c for c in sc.controllers if c.label == label)
-    params = sc.node_params(ctrl)
+def before_commissioning(sc: Scenario) -> dict[str, float | int]:
+    """What a freshly wired node is told before commissioning: the rig's sensor and DAC
+    scalings and the user's pressure range and constraints (the scenario's)."""
+    proto = protocol()
+    wiring = sc.rig_params().firmware_scaling()
+    wiring.pop("act.p0_kpa", None)
+    out: dict[str, float | int] = {n: float(v) if proto.param(n).type == "f32" else int(round(v))
+                                   for n, v in wiring.items()}
+    out.update({n: sc.params[n] for n in USER_LIMITS if n in sc.params})
+    return out
+
+
+def task_of(sc: Scenario, label: str | None = None) -> Task:
+    """The task of the scenario's lane (default: its first commissioned or PPC lane): w1 and t_u
+    (a lane without them, e.g. MFAC, takes those of the scenario's first PPC lane), the
+    constraints, where the reference starts, the range it spans and how fast it gets."""
+    ctrl = _lane(sc, label)
+    own = {**sc.params, **next((c.params for c in sc.controllers if c.mode == "PPC"), {}), **ctrl.params}
+    proto = protocol()
     t = np.arange(0.0, sc.duration_s, 1e-3)
     xr = reference_function(sc.reference)(t)
-    return Task(w1_cm=float(params["ppc.w1_cm"]), t_u_s=float(params["ppc.t_u_s"]),
-                x_min_cm=float(params["safety.x_min_cm"]), x_max_cm=float(params["safety.x_max_cm"]),
-                x_start_cm=float(xr[0]), speed_cm_s=float(np.max(np.abs(np.diff(xr))) / 1e-3))
+    x_min, x_max = sc.band_cm()
+    return Task(w1_cm=float(own.get("ppc.w1_cm", proto.param("ppc.w1_cm").default)),
+                t_u_s=float(own.get("ppc.t_u_s", proto.param("ppc.t_u_s").default)),
+                x_min_cm=x_min, x_max_cm=x_max,
+                x_start_cm=float(xr[0]), speed_cm_s=float(np.max(np.abs(np.diff(xr))) / 1e-3),
+                x_ref_min_cm=float(np.min(xr)), x_ref_max_cm=float(np.max(xr)))
+
+
+def _lane(sc: Scenario, label: str | None) -> Controller:
+    if label is not None:
+        return next(c for c in sc.controllers if c.label == label)
+    return next((c for c in sc.controllers if c.commission),
+                next((c for c in sc.controllers if c.mode == "PPC"), sc.controllers[0]))
 
 
 def commission(sc: Scenario, task: Task | None = None) -> Result:
     """`pmactl commission` on a fresh node on the scenario's rig (control time, offline)."""
-    rig_params = sc.rig_params()
-    bus = OfflineBus(rig_params, node_id=1, seed=sc.seed)
+    bus = OfflineBus(sc.rig_params(), node_id=1, seed=sc.seed)
     try:
         node = PmaNode(bus, node=1, host_heartbeat_s=0.1)
-        proto = protocol()
-        wiring = rig_params.firmware_scaling()
-        wiring.pop("act.p0_kpa", None)
-        for name, value in wiring.items():
-            node.set(name, float(value) if proto.param(name).type == "f32" else int(round(value)))
-        for name in USER_LIMITS:
-            if name in sc.params:
-                node.set(name, sc.params[name])
+        for name, value in before_commissioning(sc).items():
+            node.set(name, value)
         bus.run_for(sc.settle_s)
         return Commissioning(node, task or task_of(sc)).run()
     finally:
         bus.shutdown()
 
 
-def commissioned(sc: Scenario, result: Result, label: str = "ppc") -> Scenario:
-    """The scenario with lane `label` on the derived parameters plus the task's w1 and t_u."""
+def derived_params(ctrl: Controller, derivation: dict[str, Any]) -> dict[str, Any]:
+    """A commissioned lane's own parameters: the derivation's (Result.derivation.params) for its
+    mode, the node-wide input set-up (polarity, p0, input range), and the task's own from its
+    file."""
+    own: dict[str, Any] = {k: v for k, v in derivation.items() if k.startswith(DERIVED_BY_MODE[ctrl.mode])}
+    own.update({k: derivation[k] for k in COMMISSIONED_NODE_WIDE})
+    own.update({k: ctrl.params[k] for k in COMMISSION_TASK_PARAMS if k in ctrl.params})
+    return own
+
+
+def with_derivation(ctrl: Controller, derivation: dict[str, Any]) -> Controller:
+    """The lane on the derivation (Result.derivation.params)."""
+    return dataclasses.replace(ctrl, params=derived_params(ctrl, derivation), derived=True, commission=True,
+                               description=f"{ctrl.description} [commissioned: the set pmactl commission "
+                                           "derived on this rig, plus the task's own parameters]")
+
+
+def commissioned(sc: Scenario, result: Result, labels: tuple[str, ...] | None = None) -> Scenario:
+    """The scenario with its commissioned lanes (or the lanes `labels`, commissioned or not) on
+    the derivation."""
     d = result.derivation.params
-    ctrls = []
-    for c in sc.controllers:
-        if c.label == label:
-            own: dict[str, Any] = {k: v for k, v in d.items() if k.startswith(("ppc.", "vel."))}
-            own.update({k: c.params[k] for k in ("ppc.w1_cm", "ppc.t_u_s") if k in c.params})
-            c = dataclasses.replace(c, params=own, description=f"{c.description} [commissioned: the set derived "
-                                    "by pmactl commission on this rig, plus the task's w1 and t_u]")
-        ctrls.append(c)
-    params = dict(sc.params)
-    params.update({k: d[k] for k in NODE_WIDE})
-    return dataclasses.replace(sc, controllers=ctrls, params=params)
+    ctrls = [with_derivation(c, d) if (c.label in labels if labels is not None else c.commission) else c
+             for c in sc.controllers]
+    return dataclasses.replace(sc, controllers=ctrls)
+
+
+def commission_offline(sc: Scenario) -> tuple[Scenario, Result | None]:
+    """The scenario ready to run offline: when it has lanes that take their set from
+    commissioning, `commission(sc)` once on its rig (every lane's rig is the same, seeded) and
+    those lanes on the derivation; else the scenario as it is (and None)."""
+    if not sc.needs_commissioning():
+        return sc, None
+    result = commission(sc)
+    return commissioned(sc, result), result

@@ -401,6 +401,10 @@ def run_scenarios(variants: list[Scenario], quick: bool, jobs: int = 1,
     """Every lane of every variant (in `jobs` worker processes), then one summary per variant
     (written to out/summary.json and out/signals.npz, or out/VARIANT_NN/ for several)."""
     t0 = time.monotonic()
+    for sc in variants:
+        if sc.needs_commissioning():
+            raise ParamError(f"{sc.name}: lane(s) {', '.join(sc.needs_commissioning())} take their set from "
+                             "commissioning (hil/commissioned.py: commission, commissioned)")
     todo = [(v, sc, i) for v, sc in enumerate(variants) for i in range(len(sc.controllers))]
     results = _map([(sc, i, quick, False) for _, sc, i in todo], jobs)
     for r in results:
@@ -605,9 +609,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", metavar="FILE", help="write every variant's summary to FILE (a JSON list)")
     p.add_argument("--brief", action="store_true", help="the sweep table only, not each variant's report")
     p.add_argument("--commission", action="store_true",
-                   help="the ppc lane on the set `pmactl commission` derives on each variant's rig (over CAN "
-                        "frames, offline) plus the task's w1 and t_u, instead of the file's set "
-                        "(docs/commissioning.md); what was measured and derived goes into the summary")
+                   help="run `pmactl commission` on each variant's rig first (over CAN frames, offline) and put "
+                        "the lanes with commission = true (ppc, mfac) on the derived set plus the task's own "
+                        "parameters (docs/commissioning.md); what was measured and derived goes into the summary")
 
 
 def main(args: argparse.Namespace) -> int:
@@ -644,13 +648,18 @@ def main(args: argparse.Namespace) -> int:
     out = Path(args.out) if args.out else None
     runs = [v.scenario for v in variants]
     commissionings: list[Any] = []
-    if getattr(args, "commission", False):
+    needs = sc.needs_commissioning()
+    if needs and not args.commission:
+        print(f"hil offline: {sc.name}: lane(s) {', '.join(needs)} take their set from commissioning: add "
+              "--commission (or choose other lanes with --controller)", file=sys.stderr)
+        return 2
+    if args.commission:
         from pmactl.commission import CommissionAborted
         from pmactl.commission_rules import CommissionError
 
         from .commissioned import commission, commissioned
-        if not any(c.label == "ppc" for c in sc.controllers):
-            print(f"hil offline: --commission: {sc.name} has no ppc lane", file=sys.stderr)
+        if not needs:
+            print(f"hil offline: --commission: {sc.name} has no lane with commission = true", file=sys.stderr)
             return 2
         try:
             for i, v in enumerate(runs):

@@ -25,9 +25,11 @@ figures of merit to summary.json (hil/metrics.py).
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import sys
 import time
+from collections import deque
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -78,6 +80,8 @@ class Lane:
     telem_row: dict[str, float] = field(default_factory=dict)
     params_read_back: dict[str, float | int] = field(default_factory=dict)  # every parameter, after configuring
     identity: dict[str, Any] = field(default_factory=dict)  # the node's DEVICE_INFO (pmactl.identity)
+    sink: deque[can.Message] | None = None   # while commissioning: the node's frames for its LaneBus
+    commissioning: dict[str, Any] | None = None   # what commissioning measured and derived (--commission)
 
 
 BUS_DBC = "bus.dbc"     # the DBC of the run's nodes (pmactl.nodedbc), beside the bus log
@@ -96,6 +100,9 @@ class RunOptions:
     # fails: in lockstep a node answers at once, but the vcan guest's one CPU, on a busy
     # host, can hold it back for seconds; a dead node is found at once (_check_alive)
     reply_timeout_s: float = REPLY_TIMEOUT_S
+    # run `pmactl commission` on the node of every lane with commission = true before ARM, on
+    # that lane's rig over this bus, and run the lane on the derived set (hil/commissioned.py)
+    commission: bool = False
 
 
 class Progress:
@@ -168,6 +175,12 @@ class Runner:
         nodes = [self.opts.board_node] if self.opts.board else list(range(1, len(self.sc.controllers) + 1))
         if self.opts.board and len(self.sc.controllers) != 1:
             raise RunError("--board runs one controller at a time: choose it with --controller LABEL")
+        needs = self.sc.needs_commissioning()
+        if needs and self.opts.board:
+            raise RunError(f"lane(s) {', '.join(needs)} take their set from commissioning, which --board does not "
+                           "run: commission the board with `pmactl commission --apply`, or choose another lane")
+        if needs and not self.opts.commission:
+            raise RunError(f"lane(s) {', '.join(needs)} take their set from commissioning: run with --commission")
         msgs = ["PLANT_ACTUATOR", "COMMAND_ACK", "PARAM_RESP", "HEARTBEAT", "TELEM_A", "TELEM_B",
                 "TELEM_C", "TELEM_D", "TELEM_E", "DEVICE_INFO"]
         filters: list[dict[str, Any]] = []
@@ -269,6 +282,97 @@ class Runner:
             except NoReply as e:
                 lane.identity = {"node": lane.node, "error": str(e)}
 
+    # -------------------------------------------------------- commissioning --
+    def _commission(self) -> None:
+        """--commission: `pmactl commission` on the node of each lane with commission = true,
+        one lane at a time, over the bus and on the lane's rig (hil/lane_bus.py), as a user would
+        on a freshly wired rig: the node is told only the rig's wiring and the user's limits
+        first. The lane then runs on the derived set plus the task's own parameters, on a fresh
+        rig of the same parameters and seed, so that every lane of the scenario starts alike."""
+        from pmactl.commission import CommissionAborted, Commissioning
+        from pmactl.commission_rules import CommissionError
+
+        from .commissioned import before_commissioning, task_of, with_derivation
+        from .lane_bus import LaneBus
+        from .summary import jsonable
+        for lane in self.lanes:
+            if not (lane.ctrl.commission and not lane.ctrl.derived):
+                continue
+            label = lane.ctrl.label
+            wiring = before_commissioning(self.sc)
+            try:
+                current = {name: lane.client.get(name) for name in RULE_PARAMS}
+                for name in set_order(current, wiring):
+                    lane.client.set(name, wiring[name])
+            except (RuleError, PmaError, NoReply) as e:
+                raise RunError(f"node {lane.node} ({label}): setting its wiring before commissioning: {e}") from e
+            bus = LaneBus(self, lane)
+            lane.sink = bus.rx
+            try:
+                for _ in range(max(1, round(self.sc.settle_s / self.period_s))):
+                    self.tick_lane(lane)
+                node = PmaNode(bus, lane.node, self.proto, timeout_s=self.opts.reply_timeout_s, host_heartbeat_s=0.1)
+                progress = self._commission_progress(label) if self.opts.progress else None
+                result = Commissioning(node, task_of(self.sc, label), progress=progress).run()
+            except (CommissionError, CommissionAborted) as e:
+                raise RunError(f"commissioning lane {label} (node {lane.node}) refused: {e}") from e
+            except (PmaError, NoReply) as e:
+                raise RunError(f"commissioning lane {label} (node {lane.node}): {e}") from e
+            finally:
+                lane.sink = None
+                bus.shutdown()
+            lane.ctrl = with_derivation(lane.ctrl, result.derivation.params)
+            lane.params = self.sc.node_params(lane.ctrl)
+            lane.commissioning = jsonable({**result.report(), "control_ticks": bus.ticks})
+            lane.rig = Rig(self.sc.rig_params(), seed=self.sc.seed)
+            lane.seq = 0
+        self.sc = dataclasses.replace(self.sc, controllers=[lane.ctrl for lane in self.lanes])
+
+    @staticmethod
+    def _commission_progress(label: str) -> Any:
+        last: list[str] = []
+
+        def show(what: str, frac: float) -> None:
+            if not last or last[0] != what:
+                print(f"commissioning {label}: {what} ({100 * frac:.0f} %)", file=sys.stderr, flush=True)
+                last[:] = [what]
+        return show
+
+    def tick_lane(self, lane: Lane) -> None:
+        """One control tick of one lane, not recorded (commissioning): its rig's sample out, the
+        node's command in (its other frames go to the lane's sink), one rig period."""
+        assert self.bus is not None
+        lane.seq = (lane.seq + 1) & 0xFF
+        data = self.proto.messages["PLANT_SENSOR"].encode({"Seq": lane.seq, "RawCounts": lane.rig.sensor_counts()},
+                                                           scaling=False)
+        self.send_frame(can.Message(arbitration_id=self.proto.frame_id("PLANT_SENSOR", lane.node), data=data,
+                                    is_extended_id=False, timestamp=time.time(), is_rx=False))
+        deadline = time.monotonic() + self.opts.reply_timeout_s
+        while True:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                self._check_alive()
+                raise RunError(f"no PLANT_ACTUATOR from node {lane.node} within {self.opts.reply_timeout_s:g} s "
+                               "while commissioning")
+            rx = self.bus.recv(left)
+            got = self._receive(rx) if rx is not None else None
+            if got is not None and got[0] is lane and got[1]["Seq"] == lane.seq:
+                lane.last_dac = int(got[1]["DacCounts"])
+                break
+        lane.rig.apply_dac(lane.last_dac)
+        lane.rig.step(self.period_s)
+
+    def poll_lane(self, lane: Lane) -> None:
+        """The frames already received (the node's replies come without a tick)."""
+        assert self.bus is not None
+        while (msg := self.bus.recv(0)) is not None:
+            self._receive(msg)
+
+    def send_frame(self, msg: can.Message) -> None:
+        assert self.bus is not None
+        self.bus.send(msg)
+        self._log(msg)
+
     # ------------------------------------------------------------- ticking --
     def _tick(self, rec: Recorder, phase: int, run_step: int) -> int:
         """One control tick of every lane: sensor out, actuator in, rig step. Returns how
@@ -367,6 +471,8 @@ class Runner:
         i, name = found
         lane = self.lanes[i]
         if name != "PLANT_ACTUATOR":
+            if lane.sink is not None:
+                lane.sink.append(msg)
             self._other_frame(lane, name, msg)
             return None
         if len(msg.data) != 4:
@@ -429,6 +535,7 @@ class Runner:
         try:
             self._open()
             self._start_firmware()
+            self._commission()
             self._configure()
             n_settle = max(1, round(sc.settle_s / self.period_s))
             n_armed = max(1, round(sc.armed_s / self.period_s))
@@ -548,4 +655,7 @@ class Runner:
                          errors=self.errors, interrupted=self.interrupted, benchmark=self.bench, wall_s=wall_s,
                          out=self.out, extra={"bus_log": f"bus.{self.opts.log_format}", "bus_dbc": BUS_DBC,
                                                 "signals": "signals.npz",
-                                                "identity": {ln.ctrl.label: ln.identity for ln in self.lanes}})
+                                                "identity": {ln.ctrl.label: ln.identity for ln in self.lanes},
+                                                **({"commissioning": {ln.ctrl.label: ln.commissioning
+                                                                      for ln in self.lanes if ln.commissioning}}
+                                                   if any(ln.commissioning for ln in self.lanes) else {})})

@@ -27,6 +27,11 @@ A scenario file (hil/scenarios/*.toml, docs/hil.md has the full reference):
     mode = "PPC"
     params = { "ppc.w1_cm" = 0.2 }
 
+    [[controllers]]              # a lane whose set comes from `pmactl commission` on its rig
+    label = "mfac"               # (hil run/offline --commission); only the task's own
+    mode = "MFAC"                # parameters here (COMMISSION_TASK_PARAMS)
+    commission = true
+
     [[events]]                   # rig or host actions at a control time
     t_s = 20.0
     action = "disturbance"
@@ -57,6 +62,12 @@ from .rig_params import RigParams
 RULE_PARAMS = ("adc.gain_cm_per_count", "adc.raw_min_counts", "adc.raw_max_counts",
                "adc.wire_break_below_counts", "dac.counts_per_kpa", "dac.min_counts", "dac.max_counts")
 
+# What a commissioned lane's file may give: the task's own parameters (accuracy, tuning time, the
+# band check); everything else comes from commissioning, the node-wide input set-up included
+COMMISSION_TASK_PARAMS = ("ppc.w1_cm", "ppc.t_u_s", "ppc.band_check")
+COMMISSIONED_NODE_WIDE = ("act.polarity", "act.p0_kpa", "ctrl.u_min", "ctrl.u_max")
+COMMISSION_MODES = ("PPC", "MFAC")
+
 SCENARIO_DIR = Path(__file__).resolve().parent / "scenarios"
 
 # Rig and host actions an event can take (value: its unit).
@@ -83,6 +94,10 @@ class Controller:
     mode: str                       # ctrl.mode: PPC, MFAC, PID, OPEN_LOOP, OFF
     params: dict[str, float | int]  # firmware parameters of this controller only
     description: str = ""
+    # commission = true in the file: the lane's set comes from `pmactl commission` on its own rig
+    # (hil run/offline --commission); the file gives only the task's own parameters
+    commission: bool = False
+    derived: bool = False           # params hold a commissioning's derivation (hil/commissioned.py)
 
 
 @dataclass(frozen=True)
@@ -134,12 +149,16 @@ class Scenario:
         for name, value in wiring.items():
             p = proto.param(name)
             out[name] = float(value) if p.type == "f32" else int(round(value))
-        out.update(self.params)
+        out.update({k: v for k, v in self.params.items() if not (ctrl.commission and k in COMMISSIONED_NODE_WIDE)})
         out.update({f"ref.{k}": v for k, v in self.reference.items() if k != "kind"})
         out["ref.kind"] = proto.param("ref.kind").check(self.reference_kind())
         out["ctrl.mode"] = proto.param("ctrl.mode").check(ctrl.mode)
         out.update(ctrl.params)
         return {k: proto.param(k).check(v) for k, v in out.items()}
+
+    def needs_commissioning(self) -> list[str]:
+        """The lanes whose set comes from commissioning and has not been derived yet."""
+        return [c.label for c in self.controllers if c.commission and not c.derived]
 
     def reference_kind(self) -> str:
         return str(self.reference.get("kind", "HOLD")).upper()
@@ -307,7 +326,7 @@ def parse(data: dict[str, Any], path: Path | None = None) -> Scenario:
         raise ScenarioError(f"{where}: at most 15 controllers (one CAN node id each)")
     for i, c in enumerate(raw_ctrls):
         cw = f"{where}: controllers[{i}]"
-        extra = set(c) - {"label", "mode", "params", "description"}
+        extra = set(c) - {"label", "mode", "params", "description", "commission"}
         if extra:
             raise ScenarioError(f"{cw}: unknown key(s) {', '.join(sorted(extra))}")
         label = str(c.get("label", ""))
@@ -317,8 +336,18 @@ def parse(data: dict[str, Any], path: Path | None = None) -> Scenario:
         mode = str(c.get("mode", "")).upper()
         if mode not in protocol().param("ctrl.mode").values.values():
             raise ScenarioError(f"{cw}: mode {mode!r} is not a ctrl.mode value")
-        controllers.append(Controller(label, mode, _check_params(f"{cw}.params", c.get("params", {})),
-                                      str(c.get("description", ""))))
+        cparams = _check_params(f"{cw}.params", c.get("params", {}))
+        commission = c.get("commission", False)
+        if not isinstance(commission, bool):
+            raise ScenarioError(f"{cw}: commission must be true or false")
+        if commission:
+            if mode not in COMMISSION_MODES:
+                raise ScenarioError(f"{cw}: commission = true needs mode {' or '.join(COMMISSION_MODES)}")
+            beyond = sorted(set(cparams) - set(COMMISSION_TASK_PARAMS))
+            if beyond:
+                raise ScenarioError(f"{cw}: a commissioned lane gives only the task's own parameters "
+                                    f"({', '.join(COMMISSION_TASK_PARAMS)}); not {', '.join(beyond)}")
+        controllers.append(Controller(label, mode, cparams, str(c.get("description", "")), commission))
 
     events: list[Event] = []
     for i, ev in enumerate(data.get("events", [])):
@@ -365,6 +394,8 @@ def _check_rules(where: str, scenario: "Scenario") -> None:
     for ctrl in scenario.controllers:
         values = {**defaults, **scenario.node_params(ctrl)}
         rule = broken_rule(values)
+        if rule in (6, 8, 11, 12) and ctrl.commission and not ctrl.derived:
+            rule = 0        # the input set-up is commissioning's (polarity, p0, u range)
         if rule:
             names = {1: "adc.gain_cm_per_count != 0",
                      2: "adc.raw_min_counts <= adc.raw_max_counts",

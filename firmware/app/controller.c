@@ -57,6 +57,9 @@ int pma_ctrl_start(pma_ctrl_t *s, const pma_params_t *p, float period_s)
     case PMA_CTRL_MODE_PPC: {
         s->ppc_ref_vel = (uint8_t)(p->ppc_ref_vel != 0);
         s->ppc_obs_pos = (uint8_t)(p->ppc_obs_pos != 0);
+        s->ref_ff_u_per_cm = p->ppc_ref_ff;
+        s->ref_ff_lead_s = p->ppc_ref_ff_lead_s;
+        if (!isfinite(s->ref_ff_u_per_cm) || !(s->ref_ff_lead_s >= 0.0f)) return PMA_ERR_RANGE;
         if (s->ppc_obs_pos && vc.kind != PMA_VELEST_TRACKING) return PMA_ERR_RANGE;
         pma_ppc_config_t c;
         pma_ppc_default_config(&c);
@@ -137,6 +140,14 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
             const float x_law_cm = s->ppc_obs_pos ? s->vel.xh : x_cm;
             const float v_law_cm_s = s->ppc_ref_vel ? o->v_cm_s - o->xr_dot_cm_s : o->v_cm_s;
             CHECK(pma_ppc_step_f32(&s->c.ppc, t_s, x_law_cm, v_law_cm_s, o->xr_cm, &out));
+            if (s->ref_ff_u_per_cm != 0.0f) {
+                if (!s->xr0_set) {
+                    s->xr0_cm = o->xr_cm;
+                    s->xr0_set = 1;
+                }
+                const float ahead_cm = (o->xr_cm - s->xr0_cm) + s->ref_ff_lead_s * o->xr_dot_cm_s;
+                out = clampf(out + s->ref_ff_u_per_cm * ahead_cm, s->u_min, s->u_max);
+            }
             o->flags = s->c.ppc.out.flags;
             o->internal1 = s->c.ppc.out.lambda1_cm;
             o->internal2 = s->c.ppc.out.lambda2_cm_s;

@@ -44,6 +44,10 @@ typedef struct pma_ctrl {
     } c;
     uint8_t ppc_ref_vel;    /* option ppc.ref_vel: the law damps x' - x_r' */
     uint8_t ppc_obs_pos;    /* option ppc.obs_pos: the law's x is the observer's x_hat */
+    uint8_t xr0_set;        /* xr0_cm holds the reference at START */
+    float ref_ff_u_per_cm;  /* option ppc.ref_ff: the static map's slope [input unit/cm] (0: off) */
+    float ref_ff_lead_s;    /* ppc.ref_ff_lead_s: how far ahead the feedforward takes x_r [s] */
+    float xr0_cm;           /* the reference at START [cm] */
     uint32_t breaches;      /* steps with a barrier clamp since START */
     /* PPC's guarantee monitor and fallback (docs/controllers.md, "When the guarantee is lost") */
     pma_mfac_f32_t shadow;  /* MFAC, learning from the applied input while the PPC is in charge */
@@ -75,7 +79,14 @@ typedef struct pma_ctrl {
  *  - ppc.obs_pos: the position input is the tracking observer's estimate
  *    x_hat (vel.kind 1, bandwidth vel.fc_hz) instead of the raw sample: the
  *    law's error e = x_hat - x_r passes the sensor's noise and quantisation
- *    to u only through the observer's low-pass. */
+ *    to u only through the observer's low-pass.
+ *  - ppc.ref_ff (input unit per cm) with ppc.ref_ff_lead_s: a reference
+ *    feedforward added to the law's output (and the sum clamped to
+ *    ctrl.u_min..u_max), u_rff = ref_ff ((x_r - x_r(0)) + lead x_r'), x_r(0)
+ *    the reference at START: the input the static map predicts for the
+ *    reference taken `lead` ahead, so that the law and its feedforward
+ *    integrator (whose clamp to the input range bounds its wind-up) correct
+ *    only what the map does not predict. Off (0) in the paper's law. */
 int pma_ctrl_start(pma_ctrl_t *s, const pma_params_t *p, float period_s);
 
 /* One step at control time t_s with position x_cm; openloop_u is the live

@@ -25,6 +25,7 @@ import pytest
 
 from hil import offline
 from hil import scenario as scn
+from hil.commissioned import commission_offline
 
 CHATTER_MAX = 3.0   # pressure command's total variation at most 3x what the reference needs
 JOBS = 2            # worker processes per scenario (the machines have 2 cores)
@@ -45,6 +46,7 @@ def runs(tmp_path_factory: pytest.TempPathFactory) -> Any:
             sc = scn.load("case3" if quick else name)
             if sc.name == "case3":
                 sc.controllers = [c for c in sc.controllers if (c.label == "pid") == quick]
+            sc, _ = commission_offline(sc)     # the ppc and mfac lanes: commissioned on the rig
             summary = offline.run_scenarios([sc], quick=quick, jobs=JOBS, out=out)[0]
             assert not summary["errors"], summary["errors"]
             cache[name] = (summary, out)
@@ -68,9 +70,8 @@ def test_paper_controller_meets_its_guarantees(runs, case):
 
 @pytest.mark.parametrize("case", ["case1", "case2a", "case2b", "case3"])
 def test_paper_controller_has_no_barrier_breach_after_tu(runs, case):
-    """With the scenario's set (docs/hil.md: Cases 1 and 2 w2 = 2 cm/s and c = 32, Case 3 its
-    own) lambda2 never meets its barrier after t_u, and the supervisor's BARRIER fault
-    (safety.barrier_ticks, left at its default) is on for this node."""
+    """With the commissioned set lambda2 never meets its barrier after t_u, and the supervisor's
+    BARRIER fault (safety.barrier_ticks, left at its default) is on for this node."""
     s, _ = runs(case)
     c = s["controllers"]["ppc"]
     assert "safety.barrier_ticks" not in c["params_set"]
@@ -136,6 +137,24 @@ def test_smaller_tu_enters_the_band_sooner(runs):
     ta, tb = a["controllers"]["ppc"]["time_to_band_s"], b["controllers"]["ppc"]["time_to_band_s"]
     assert tb < ta
     assert tb <= 2.0 and ta <= 6.0     # by t_u
+
+
+@pytest.mark.parametrize("case", ["case1", "case2a", "case2b", "case3", "load_change", "constraint_approach"])
+def test_one_commissioned_set_for_every_task(runs, case):
+    """The ppc and mfac lanes run on what commissioning derived on the rig plus only the task's
+    own parameters: no gain and no rig-model number comes from the scenario file, and both
+    lanes run to the end without a fault; the PPC's guarantee holds (no hand-over to MFAC)."""
+    s, _ = runs(case)
+    sc = scn.load(case)
+    for label in ("ppc", "mfac"):
+        ctrl = next(c for c in sc.controllers if c.label == label)
+        assert ctrl.commission and set(ctrl.params) <= set(scn.COMMISSION_TASK_PARAMS)
+        assert s["state"][label] == "RUNNING" and s["fault_code"][label] == "NONE", (label, s["fault_code"])
+    derived = s["controllers"]["ppc"]["params_set"]
+    for name in ("act.p0_kpa", "ppc.a_cm_s", "ppc.c", "ppc.w2_cm_s", "ppc.ff_init", "ppc.ref_ff", "mfac.phi1"):
+        assert name in derived
+    assert derived["act.p0_kpa"] != sc.params["act.p0_kpa"]      # the preset pressure is measured
+    assert s["controllers"]["ppc"]["samples_outside_w1_after_tu"] == 0
 
 
 # ------------------------------------------------------------- other scenarios --

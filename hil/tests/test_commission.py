@@ -9,12 +9,14 @@ derives, what it refuses, and that it leaves the node as it found it.
 from __future__ import annotations
 
 import math
+import tomllib
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
 
+import pmactl.commission_rules as rules
 from hil import offline
 from hil import scenario as scn
 from hil.offline_bus import OfflineBus
@@ -84,10 +86,12 @@ def test_derive_follows_the_rules():
     # u = polarity (p - p0): the range maps onto 0..900 kPa exactly
     assert p["act.p0_kpa"] - p["ctrl.u_max"] == pytest.approx(0.0, abs=0.02)
     assert p["act.p0_kpa"] - p["ctrl.u_min"] == pytest.approx(900.0, abs=0.02)
-    # SIMC: tau_c = theta_eff = theta + one period
+    # SIMC with the tightest tau_c that keeps the margins, here the first: 0.35 theta_eff
+    # (theta_eff = theta + one period = 0.011 s), but not below tau / 5 = 0.01 s
     f = d.figures
-    assert f["tau_c_s"] == pytest.approx(0.011)
-    assert f["kc_u_per_cm"] == pytest.approx(0.05 / (0.003 * 0.022), rel=1e-6)
+    tau_c = max(rules.TAU_C_PER_THETA[0] * 0.011, 0.05 / rules.SPEEDUP_MAX)
+    assert f["tau_c_s"] == pytest.approx(tau_c)
+    assert f["kc_u_per_cm"] == pytest.approx(0.05 / (0.003 * (tau_c + 0.011)), rel=1e-6)
     assert p["ppc.w2_cm_s"] == pytest.approx(5.0 * p["ppc.a_cm_s"], rel=1e-3)
     assert d.margins["phase_margin_deg"] > 45.0 and d.margins["gain_margin"] > 2.0
     # the steady-state input at the start position, for the feedforward and MFAC
@@ -98,11 +102,37 @@ def test_derive_follows_the_rules():
 
 def test_derive_gains_fall_with_the_dead_time():
     fast, slow = derive(_measured(theta=0.005), TASK), derive(_measured(theta=0.04), TASK)
-    assert slow.params["ppc.a_cm_s"] < fast.params["ppc.a_cm_s"]
+    assert slow.params["ppc.a_cm_s"] <= fast.params["ppc.a_cm_s"]   # K_p = 1 / tau_I: the lag's, or slower
     assert slow.figures["kc_u_per_cm"] < fast.figures["kc_u_per_cm"]
     # the margins are the rule's, whatever the lag
     for d in (fast, slow):
-        assert 50.0 < d.margins["phase_margin_deg"] < 80.0
+        assert d.margins["phase_margin_deg"] >= rules.PM_MIN_DEG and d.margins["gain_margin"] >= rules.GM_MIN
+
+
+def test_derive_relaxes_the_loop_until_its_margins_hold():
+    """A lag-free response (theta 0): the tightest tau_c is bounded by tau / SPEEDUP_MAX, and the
+    margins the report prints are those of the loop the rule chose."""
+    d = derive(_measured(theta=0.0, tau=0.2), TASK)
+    assert d.figures["tau_c_s"] >= 0.2 / rules.SPEEDUP_MAX - 1e-12
+    assert d.margins["phase_margin_deg"] >= rules.PM_MIN_DEG and d.margins["gain_margin"] >= rules.GM_MIN
+
+
+def test_reference_feedforward_is_the_static_maps_slope_taken_tau_plus_theta_ahead():
+    # a linear map with no hysteresis: x = -p / 400 cm, so 400 kPa hold one cm more (u per cm with
+    # polarity -1 and 1 kPa per unit: +400, u rising as x rises)
+    p = [0.0, 200.0, 400.0, 600.0, 800.0]
+    x = [-q / 400.0 for q in p]
+    m = _measured(theta=0.02, tau=0.06)
+    m.static_map = StaticMap(p, x, p, x)
+    task = Task(w1_cm=0.2, t_u_s=2.0, x_min_cm=-3.0, x_max_cm=0.0, x_ref_min_cm=-1.5, x_ref_max_cm=-0.5)
+    d = derive(m, task)
+    assert d.params["ppc.ref_ff"] == pytest.approx(400.0, rel=1e-4)
+    assert d.params["ppc.ref_ff_lead_s"] == pytest.approx(0.06 + 0.02 + 1e-3, abs=1e-4)
+    # a steeper map where the reference lives: the slope is taken over the reference's range
+    x2 = [0.0, -0.5, -1.0, -1.25, -1.5]         # 400 kPa per cm to -1 cm, 800 beyond
+    m.static_map = StaticMap(p, x2, p, x2)
+    low = derive(m, Task(w1_cm=0.1, t_u_s=2.0, x_min_cm=-3.0, x_max_cm=0.5, x_ref_min_cm=-1.5, x_ref_max_cm=-1.0))
+    assert low.params["ppc.ref_ff"] == pytest.approx(800.0, rel=1e-3)
 
 
 def test_derive_says_what_the_task_cannot_have():
@@ -263,3 +293,29 @@ def test_hil_offline_runs_the_ppc_lane_on_the_commissioned_set(tmp_path: Path, c
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert summary["controllers"]["ppc"]["params_set"]["ppc.a_cm_s"] == pytest.approx(
         rep["derivation"]["params"]["ppc.a_cm_s"])
+
+
+def test_scenario_lanes_take_their_set_from_commissioning(tmp_path: Path, capsys):
+    """The paper's cases give their ppc and mfac lanes no gains: running them needs --commission
+    (exit 2 without it, with the lanes named), a commissioned lane that carries a gain is refused
+    when the file is loaded, and --commission on a scenario without such a lane is refused."""
+    from hil.__main__ import main as hil_main
+    for case in ("case1", "case2a", "case2b", "case3", "load_change", "constraint_approach"):
+        sc = scn.load(case)
+        assert set(sc.needs_commissioning()) == {"ppc", "mfac"}, case
+    assert hil_main(["offline", "case3", "--controller", "mfac", "--duration", "1"]) == 2
+    assert "take their set from commissioning" in capsys.readouterr().err
+    assert hil_main(["offline", "wire_break", "--commission"]) == 2
+    assert hil_main(["run", "case3", "--out", str(tmp_path / "r"), "--controller", "ppc-paper", "--commission"]) == 2
+    assert hil_main(["run", "case3", "--out", str(tmp_path / "r")]) == 2
+    assert "--commission" in capsys.readouterr().err
+    bad = dict(tomllib.loads((scn.SCENARIO_DIR / "case3.toml").read_text()))
+    bad["name"] = "bad"
+    bad.pop("base")
+    bad.update(tomllib.loads((scn.SCENARIO_DIR / "_rig_paper.toml").read_text()))
+    bad["controllers"] = [{"label": "ppc", "mode": "PPC", "commission": True, "params": {"ppc.a_cm_s": 10.0}}]
+    with pytest.raises(scn.ScenarioError, match="only the task's own parameters"):
+        scn.parse(bad)
+    bad["controllers"] = [{"label": "pid", "mode": "PID", "commission": True}]
+    with pytest.raises(scn.ScenarioError, match="commission = true needs mode"):
+        scn.parse(bad)

@@ -110,7 +110,8 @@ def test_summary_records_every_nodes_identity(runs):
 # ---------------------------------------------------------------- clean stops --
 def _start_cli(out: Path, extra_env: dict[str, str] | None = None) -> subprocess.Popen[bytes]:
     env = dict(os.environ, PMA_HIL_INSIDE="1", **(extra_env or {}))
-    return subprocess.Popen([sys.executable, "-m", "hil", "run", "case1", "--out", str(out), "--no-figures"],
+    return subprocess.Popen([sys.executable, "-m", "hil", "run", "case1", "--controller", "ppc-paper",
+                             "--out", str(out), "--no-figures"],
                             cwd=REPO, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
 
 
@@ -161,7 +162,7 @@ def test_board_mode_drives_a_real_time_node(tmp_path):
     the law's path is what this test follows)."""
     from hil.fw_process import FirmwareProcess
     sc = scn.load("case1")
-    sc.controllers = [c for c in sc.controllers if c.label == "ppc"]
+    sc.controllers = [c for c in sc.controllers if c.label == "ppc-paper"]
     sc.params.update({"sys.tick_hz": 50, "safety.sensor_timeout_ticks": 10000, "safety.host_timeout_ms": 60000,
                       "safety.max_late_ticks": 1000, "safety.barrier_ticks": 0, "ppc.fallback": 0})
     node = 5
@@ -174,7 +175,7 @@ def test_board_mode_drives_a_real_time_node(tmp_path):
         fw.stop()
     assert not summary["errors"], summary["errors"]
     assert not (out / "firmware").exists()                  # the harness started no firmware
-    c = summary["controllers"]["ppc"]
+    c = summary["controllers"]["ppc-paper"]
     print(f"board path at 50 Hz: {c['board_repeated_ticks']} ticks without a new sample, "
           f"max |e| after t_u {c['max_abs_error_after_tu_cm']:.4f} cm (w1 {c['w1_cm']} cm), "
           f"{c['constraint_violations_true_x']} samples outside the constraint")
@@ -183,12 +184,12 @@ def test_board_mode_drives_a_real_time_node(tmp_path):
     # the harness's time axis is the board's: its x and x_r match TELEM_A/B tick for tick,
     # also across ticks without a new sample (board_repeated_ticks of them, however many)
     assert c["reference_check_max_abs_cm"] < 1e-4 and c["board_repeated_ticks"] >= 0
-    assert (summary["state"]["ppc"], summary["fault_code"]["ppc"]) == ("RUNNING", "NONE"), \
+    assert (summary["state"]["ppc-paper"], summary["fault_code"]["ppc-paper"]) == ("RUNNING", "NONE"), \
         f"{summary['state']} {summary['fault_code']}, {c['board_repeated_ticks']} repeated ticks"
     d = np.load(out / "signals.npz")
-    run = d["ppc__run_step"] >= 0
-    assert np.all(d["ppc__output_active"][run] == 1)
-    assert np.count_nonzero(d["ppc__sample_status"][run] == 3) == 0     # every tick had a sample
+    run = d["ppc-paper__run_step"] >= 0
+    assert np.all(d["ppc-paper__output_active"][run] == 1)
+    assert np.count_nonzero(d["ppc-paper__sample_status"][run] == 3) == 0     # every tick had a sample
     # the run's time axis counts the board's ticks: strictly increasing, to the run's end
-    steps = d["ppc__run_step"][run]
+    steps = d["ppc-paper__run_step"][run]
     assert np.all(np.diff(steps) >= 1) and steps[-1] >= round(summary["duration_s"] / summary["period_s"]) - 1

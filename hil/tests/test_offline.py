@@ -13,6 +13,7 @@ import pytest
 from hil import offline
 from hil import scenario as scn
 from hil.__main__ import main
+from hil.commissioned import commission_offline
 
 ARM, START, STOP = (scn.protocol().commands[c] for c in ("ARM", "START", "STOP"))
 COUNTS_AT_MINUS_1_5_CM = 2948     # the default adc.* scaling: x = 7.5 - 0.0030525 counts
@@ -125,6 +126,7 @@ def test_an_offline_run_is_deterministic_and_jobs_do_not_change_it(tmp_path):
     sc = scn.load("case2b")
     sc.duration_s = sc.quick_duration_s = 3.0
     sc.windows = [(1.0, 3.0)]
+    sc, _ = commission_offline(sc)          # its ppc and mfac lanes take their set from commissioning
     one = offline.run_scenarios([sc], quick=False, jobs=1)[0]
     two = offline.run_scenarios([sc], quick=False, jobs=2)[0]
     assert one["expect_met"] and not one["errors"]
@@ -134,11 +136,11 @@ def test_an_offline_run_is_deterministic_and_jobs_do_not_change_it(tmp_path):
 
 def test_a_grid_sweeps_firmware_and_rig_values(tmp_path, capsys):
     out = tmp_path / "sweep.json"
-    rc = main(["offline", "case2b", "--controller", "ppc", "--duration", "3", "--grid", "ppc.c=16,32",
+    rc = main(["offline", "case2b", "--controller", "ppc-paper", "--duration", "3", "--grid", "ppc.c=16,32",
                "--grid", "rig:load.bias_force_n=0,5", "--json", str(out), "--brief"])
     assert rc == 0
     runs = json.loads(out.read_text())
     assert [r["variant"] for r in runs] == [{"ppc.c": c, "rig:load.bias_force_n": f} for c in (16, 32) for f in (0, 5)]
-    assert [r["controllers"]["ppc"]["params_read_back"]["ppc.c"] for r in runs] == [16.0, 16.0, 32.0, 32.0]
-    assert len({r["controllers"]["ppc"]["rmste_cm"][0] for r in runs}) == 4
+    assert [r["controllers"]["ppc-paper"]["params_read_back"]["ppc.c"] for r in runs] == [16.0, 16.0, 32.0, 32.0]
+    assert len({r["controllers"]["ppc-paper"]["rmste_cm"][0] for r in runs}) == 4
     assert "ppc.c=16 rig:load.bias_force_n=5" in capsys.readouterr().out

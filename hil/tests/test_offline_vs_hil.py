@@ -15,7 +15,9 @@ on the same lanes; the wire break still runs over vcan (skipped without it).
 Both run the same application code, compiled by the same compiler with the same flags (-O2;
 the library is position-independent, which changes no arithmetic), fed the same frames in the
 same order: the parameters, ARM, START, a HOST_HEARTBEAT every 100 ms of control time, one
-PLANT_SENSOR per tick. What differs and cannot change a figure: the transport (vcan and
+PLANT_SENSOR per tick. The lanes commissioned over CAN (hil run --commission) run offline on the
+set that commissioning derived; the run itself starts on a fresh rig in both. What differs and
+cannot change a figure: the transport (vcan and
 SocketCAN vs the fake CAN controller), the clock (the heartbeat follows the wall clock on the
 host, control time offline; no control rule reads it in lockstep) and the storage (a file vs
 none: SAVE is never sent).
@@ -32,6 +34,7 @@ import pytest
 
 from hil import offline
 from hil import scenario as scn
+from hil.commissioned import with_derivation
 from hil.fw_process import BUILD_HINT, FW_HOST
 from hil.runner import Runner, RunOptions
 from hil.summary import jsonable
@@ -46,7 +49,7 @@ pytestmark = [pytest.mark.vcan, pytest.mark.skipif(not GIVEN_RUN and not HAVE_VC
 # break: a fault, the safe state and the run's last ticks (run over vcan here, 5 s)
 SCENARIOS = ["case3", "wire_break"]
 # run-specific, not figures of the controllers: where and how fast it ran
-NOT_COMPARED = {"benchmark", "wall_s", "bus_log", "bus_dbc", "offline", "errors", "identity"}
+NOT_COMPARED = {"benchmark", "wall_s", "bus_log", "bus_dbc", "offline", "errors", "identity", "commissioning"}
 
 
 @pytest.fixture(scope="module", params=SCENARIOS)
@@ -68,8 +71,14 @@ def both(request: pytest.FixtureRequest,
             pytest.skip(f"{name} over CAN needs vcan0 (run under hil/with-vcan)")
         assert FW_HOST.exists(), f"{FW_HOST} missing: {BUILD_HINT}"
         hil_out = tmp_path_factory.mktemp(f"hil-{name}")
-        over_can = Runner(sc, RunOptions(out=hil_out, quick=quick, progress=False)).run()
+        over_can = Runner(sc, RunOptions(out=hil_out, quick=quick, progress=False,
+                                         commission=bool(sc.needs_commissioning()))).run()
     assert not over_can["errors"], over_can["errors"]
+    # the commissioned lanes offline on the set their commissioning over CAN derived (the run
+    # itself starts on a fresh rig, as offline)
+    derived = over_can.get("commissioning", {})
+    sc.controllers = [with_derivation(c, derived[c.label]["derivation"]["params"]) if c.commission else c
+                      for c in sc.controllers]
     off = offline.run_scenarios([sc], quick=quick, jobs=1, out=off_out)[0]
     assert not off["errors"], off["errors"]
     return over_can, off, hil_out, off_out

@@ -103,7 +103,8 @@ def test_metrics_on_known_signals():
     (["run", "case1", "--out", "x", "--controller", "nobody"], 2),
     (["run", "case1", "--out", "x", "--node", "99"], 2),
     (["run", "case3", "--out", "x", "--board"], 2),       # a board runs one controller at a time
-    (["run", "case1", "--out", "x", "--interface", "no_such_interface"], 3),
+    (["run", "case1", "--out", "x", "--controller", "ppc-paper", "--interface", "no_such_interface"], 3),
+    (["run", "case1", "--out", "x"], 2),                  # its ppc and mfac lanes need --commission
     (["frobnicate"], 2),
 ])
 def test_bad_command_lines_are_refused(argv, code, tmp_path, monkeypatch):

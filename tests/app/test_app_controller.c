@@ -52,6 +52,7 @@ static void test_options_are_off_by_default(void)
     pma_params_defaults(&par);
     TEST_ASSERT_EQUAL_INT(0, par.ppc_ref_vel);
     TEST_ASSERT_EQUAL_INT(0, par.ppc_obs_pos);
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, par.ppc_ref_ff);
 }
 
 static void test_obs_pos_needs_the_tracking_observer(void)
@@ -137,6 +138,34 @@ static void test_obs_pos_takes_the_error_from_the_observer(void)
     TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.1f, ctl_on.out.e_cm);
 }
 
+/* ppc.ref_ff with its lead: two slots on the same samples, one with the reference feedforward,
+ * differ in u by exactly ref_ff ((x_r - x_r(0)) + lead x_r') while neither output saturates. */
+static void test_ref_ff_adds_the_maps_input_for_the_reference_ahead(void)
+{
+    sine_params(&par, 1, 0, 1);
+    par.ctrl_u_min = -5000.0f;
+    par.ctrl_u_max = 5000.0f;
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ctrl_start(&ctl_off, &par, PERIOD_S));
+    par.ppc_ref_ff = 300.0f;
+    par.ppc_ref_ff_lead_s = 0.08f;
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ctrl_start(&ctl_on, &par, PERIOD_S));
+    float max_dev = 0.0f;
+    for (int k = 0; k < 2000; ++k) {
+        const float t = (float)k * PERIOD_S;
+        float u_off, u_on;
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ctrl_step(&ctl_off, t, sine_cm(t), 0.0f, &u_off));
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ctrl_step(&ctl_on, t, sine_cm(t), 0.0f, &u_on));
+        const pma_ctrl_out_t *o = &ctl_on.out;
+        const float expect = 300.0f * ((o->xr_cm - sine_cm(0.0f)) + 0.08f * o->xr_dot_cm_s);
+        const float dev = fabsf((u_on - u_off) - expect);
+        if (dev > max_dev) max_dev = dev;
+    }
+    TEST_ASSERT_TRUE(max_dev < 1e-2f);
+    /* a negative lead is refused at START */
+    par.ppc_ref_ff_lead_s = -0.1f;
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_RANGE, pma_ctrl_start(&ctl_on, &par, PERIOD_S));
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -144,5 +173,6 @@ int main(void)
     RUN_TEST(test_obs_pos_needs_the_tracking_observer);
     RUN_TEST(test_ref_vel_damps_the_velocity_error);
     RUN_TEST(test_obs_pos_takes_the_error_from_the_observer);
+    RUN_TEST(test_ref_ff_adds_the_maps_input_for_the_reference_ahead);
     return UNITY_END();
 }

@@ -30,6 +30,8 @@ enum pma_param_id {
     PMA_PARAM_PPC_REF_VEL = 42,
     PMA_PARAM_PPC_OBS_POS = 43,
     PMA_PARAM_PPC_FALLBACK = 44,
+    PMA_PARAM_PPC_REF_FF = 45,
+    PMA_PARAM_PPC_REF_FF_LEAD_S = 46,
     PMA_PARAM_MFAC_ETA = 48,
     PMA_PARAM_MFAC_MU = 49,
     PMA_PARAM_MFAC_RHO = 50,
@@ -78,9 +80,9 @@ enum pma_param_id {
     PMA_PARAM_SAFETY_SAFE_KPA = 168,
 };
 
-#define PMA_PARAM_COUNT 69u
+#define PMA_PARAM_COUNT 71u
 /* CRC-32 of the table (pmactl.protocol.param_table_hash): DEVICE_INFO's ParamTableHash. */
-#define PMA_PARAM_TABLE_HASH 0x6B871C6Fu
+#define PMA_PARAM_TABLE_HASH 0x3698F406u
 
 #define PMA_SYS_PLANT_BRIDGE_OFF 0u
 #define PMA_SYS_PLANT_BRIDGE_ON 1u
@@ -127,6 +129,8 @@ typedef struct pma_params {
     uint32_t ppc_ref_vel;                 /* id 42 */
     uint32_t ppc_obs_pos;                 /* id 43 */
     uint32_t ppc_fallback;                /* id 44 */
+    float ppc_ref_ff;                  /* id 45 [input unit/cm] */
+    float ppc_ref_ff_lead_s;           /* id 46 [s] */
     float mfac_eta;                    /* id 48 */
     float mfac_mu;                     /* id 49 */
     float mfac_rho;                    /* id 50 */

@@ -208,9 +208,12 @@ class Commissioning:
         down_p: list[float] = []
         down_x: list[float] = []
         for p in [q for q in reversed(grid) if q <= top]:
+            heading = self._heading(p)
             ok, x = self._level(p, "map")
             if not ok:
-                break
+                if self._heading_into(x, heading):
+                    break
+                continue        # still near the constraint it moves away from (hysteresis, creep)
             down_p.append(p)
             down_x.append(x)
             self.progress("static map", 0.15 + 0.22 * len(down_p) / LEVELS)
@@ -233,10 +236,11 @@ class Commissioning:
         return StaticMap(up_p, up_x, list(reversed(down_p)), list(reversed(down_x)))
 
     def _level(self, p_kpa: float, label: str) -> tuple[bool, float]:
-        """Hold one level: (False, nan) when x came near a constraint, else (True, x at its end)."""
+        """Hold one level: (False, its last x) when x came near a constraint, else (True, x at its
+        end)."""
         rec = self._hold(p_kpa, LEVEL_S, label, stop_near_limits=True)
         if self._beyond(rec.x_cm[-1]) or len(rec.x_cm) < 3:
-            return False, math.nan
+            return False, rec.x_cm[-1]
         return True, float(np.mean(rec.x_cm[-len(rec.x_cm) // 3:]))
 
     def _steps(self, static: StaticMap) -> list[StepFit]:
@@ -261,8 +265,7 @@ class Commissioning:
     def _hold(self, p_kpa: float, seconds: float, label: str, stop_near_limits: bool = False) -> Recording:
         """Command p_kpa and record x for `seconds` of control time (from the next sample)."""
         p = min(max(p_kpa, self.p_min), self.p_max)
-        # which way this level moves x: the sign of the pressure change times dx/dp's
-        heading = self.dxdp_sign * (1 if p > self.p_cmd else -1 if p < self.p_cmd else 0)
+        heading = self._heading(p)
         self.p_cmd = p
         self.node.set("ctrl.openloop_u", (p - self.p0) / self.kpa_per_u)
         rec = Recording()
@@ -286,6 +289,12 @@ class Commissioning:
         r.x_cm += rec.x_cm
         r.p_kpa += rec.p_kpa
         return rec
+
+    def _heading(self, p_kpa: float) -> int:
+        """Which way commanding p_kpa moves x (+1 up, -1 down, 0 unknown or no change): the sign
+        of the pressure change times dx/dp's."""
+        p = min(max(p_kpa, self.p_min), self.p_max)
+        return self.dxdp_sign * (1 if p > self.p_cmd else -1 if p < self.p_cmd else 0)
 
     def _depth(self, x: float) -> float:
         """How far x is inside the margin of the nearer constraint [cm] (<= 0: clear of both)."""

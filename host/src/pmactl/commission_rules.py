@@ -10,7 +10,8 @@ The model the rules use is the one a step response shows on any such rig: around
 point the position follows the pressure like a first-order lag with a dead time (FOPDT),
 x(s) / p(s) = g e^{-theta s} / (tau s + 1), with g in cm/kPa, fitted by the two-point method
 (the times to 35.3 % and 85.3 % of the step). The loop is then shaped by the SIMC rule
-(Skogestad 2003) with the closed-loop time constant tau_c = theta_eff: a PI equivalent
+(Skogestad 2003) with the closed-loop time constant tau_c the tightest of TAU_C_PER_THETA x theta_eff
+whose loop keeps PM_MIN_DEG and GM_MIN on the measured FOPDT (never below tau / SPEEDUP_MAX): a PI equivalent
 Kc, tau_I, which the paper's law realises in its small-signal form
 u = -K_v ((x' - x_r') + K_p e) plus the steady-state feedforward integrator
 (u_ff' = k_ff u_law), i.e. the PID  K_v (K_p + k_ff) + K_v s + K_v K_p k_ff / s.
@@ -25,8 +26,13 @@ import numpy as np
 
 # two-point FOPDT fit (Sundaresan & Krishnaswamy 1978)
 FIT_LOW, FIT_HIGH = 0.353, 0.853
-TAU_C_PER_THETA = 1.0        # SIMC's closed-loop time constant tau_c = theta_eff ("tight control, good robustness")
-FF_PER_KP = 10.0             # the feedforward integrator's gain k_ff in units of K_p
+# SIMC's closed-loop time constant tau_c in units of theta_eff: the tightest of these whose loop keeps
+# both margins below on the measured FOPDT (SIMC's own "tight control" is tau_c = theta)
+TAU_C_PER_THETA = (0.35, 0.5, 0.7, 1.0)
+PM_MIN_DEG, GM_MIN = 45.0, 2.0
+SPEEDUP_MAX = 5.0            # tau_c >= tau / 5: the closed loop at most 5x faster than the open loop
+FC_PER_CROSSOVER = 4.0       # the velocity observer's bandwidth in units of the loop's crossover
+FF_PER_KP = 30.0             # the feedforward integrator's gain k_ff in units of K_p
 W2_PER_A = 5.0               # lambda2's barrier at 5 a: theta = a tan(pi r / 2) reaches it at r = 0.87
 NOISE_SIGMAS_IN_W1 = 6.0     # w1 must hold 6 standard deviations of the position noise
 MFAC_ETA, MFAC_MU, MFAC_RHO, MFAC_LAMBDA = 0.5, 1.9, 31.7, 0.03   # the paper's MFAC gains
@@ -126,6 +132,8 @@ class Task:
     x_max_cm: float
     x_start_cm: float | None = None   # where the reference starts (default: the band's middle)
     speed_cm_s: float = 0.0           # the reference's largest speed (0: a set-point task)
+    x_ref_min_cm: float | None = None  # the range the reference spans (default: the band less w1)
+    x_ref_max_cm: float | None = None
 
 
 @dataclass
@@ -186,6 +194,47 @@ def mfac_phi1(ki_per_tick: float, rho: float = MFAC_RHO, lam: float = MFAC_LAMBD
     return (rho - math.sqrt(disc)) / (2.0 * ki_per_tick)
 
 
+@dataclass
+class _Shape:
+    tau_c: float
+    kc: float
+    tau_i: float
+    ki: float
+    k_p: float
+    k_v: float
+    margins: dict[str, float]
+
+
+def _shape(gain: float, tau: float, theta_eff: float, tau_c_per_theta: float) -> _Shape:
+    """SIMC's PI for the FOPDT (gain, tau, theta_eff) with tau_c = tau_c_per_theta * theta_eff,
+    in the paper's law's small-signal form K_v ((1 + r) K_p + s + r K_p^2 / s), k_ff = r K_p:
+    the PI's Kc and Ki, and a derivative K_v r + 1 times smaller than Kc / K_p; with the
+    margins of that PID on the FOPDT."""
+    # at most SPEEDUP_MAX times faster than the open loop's lag: a step response with next to no
+    # dead time (a valve whose small steps answer at once) must not ask for an unbounded gain
+    tau_c = max(tau_c_per_theta * theta_eff, tau / SPEEDUP_MAX)
+    kc = tau / (gain * (tau_c + theta_eff))
+    tau_i = min(tau, 4.0 * (tau_c + theta_eff))
+    r = FF_PER_KP
+    k_p = (1.0 + r) / (r * tau_i)
+    k_v = kc / ((1.0 + r) * k_p)
+    margins = loop_margins(k_v * (1.0 + r) * k_p, k_v * r * k_p * k_p, k_v, gain, tau, theta_eff)
+    return _Shape(tau_c=tau_c, kc=kc, tau_i=tau_i, ki=kc / tau_i, k_p=k_p, k_v=k_v, margins=margins)
+
+
+def _ref_span(task: Task, reach_lo: float, reach_hi: float) -> tuple[float, float]:
+    """Where the reference feedforward's slope is measured: the reference's range within the
+    reachable band, at least 4 w1 wide (a set-point task: around its start)."""
+    lo = reach_lo if task.x_ref_min_cm is None else min(max(task.x_ref_min_cm, reach_lo), reach_hi)
+    hi = reach_hi if task.x_ref_max_cm is None else min(max(task.x_ref_max_cm, reach_lo), reach_hi)
+    lo, hi = min(lo, hi), max(lo, hi)
+    half = 2.0 * task.w1_cm
+    if hi - lo < 2.0 * half:
+        mid = 0.5 * (lo + hi)
+        lo, hi = max(reach_lo, mid - half), min(reach_hi, mid + half)
+    return lo, hi
+
+
 def derive(m: Measured, task: Task) -> Derivation:
     """The parameters for the paper's controller and MFAC on this rig and task (module doc)."""
     if not m.steps:
@@ -215,26 +264,31 @@ def derive(m: Measured, task: Task) -> Derivation:
     tau = float(np.median([s.tau_s for s in m.steps]))
     theta = float(np.median([s.theta_s for s in m.steps]))
     theta_eff = theta + m.period_s             # one sample of the loop's own delay
-    tau_c = TAU_C_PER_THETA * theta_eff
-    kc = tau / (gain * (tau_c + theta_eff))
-    tau_i = min(tau, 4.0 * (tau_c + theta_eff))
-    ki = kc / tau_i
-    # the paper's law in small-signal form, K_v ((1 + r) K_p + s + r K_p^2 / s) with k_ff = r K_p:
-    # the PI's Kc and Ki, and a derivative (K_v) r + 1 times smaller than Kc / K_p
-    r = FF_PER_KP
-    k_p = (1.0 + r) / (r * tau_i)
-    k_v = kc / ((1.0 + r) * k_p)
+    shape = next((sh for sh in (_shape(gain, tau, theta_eff, k) for k in TAU_C_PER_THETA)
+                  if sh.margins["phase_margin_deg"] >= PM_MIN_DEG and sh.margins["gain_margin"] >= GM_MIN),
+                 None)
+    if shape is None:
+        shape = _shape(gain, tau, theta_eff, TAU_C_PER_THETA[-1])
+        warnings.append(f"no loop keeps a phase margin of {PM_MIN_DEG:g} deg and a gain margin of {GM_MIN:g} on the "
+                        "measured lag: the most robust one is used (see its margins)")
+    tau_c, kc, tau_i, ki, r, k_p, k_v, margins = (shape.tau_c, shape.kc, shape.tau_i, shape.ki, FF_PER_KP,
+                                                 shape.k_p, shape.k_v, shape.margins)
     a = 2.0 * task.w1_cm * k_p / math.pi
     w2 = W2_PER_A * a
     c = 2.0 * w2 * w2 * k_v / math.pi
-    margins = loop_margins(k_v * (1.0 + r) * k_p, k_v * r * k_p * k_p, k_v, gain, tau, theta_eff)
     wc = margins["crossover_rad_s"] if math.isfinite(margins["crossover_rad_s"]) else 1.0 / (tau_c + theta_eff)
-    fc_hz = min(max(4.0 * wc / (2.0 * math.pi), 2.0), 50.0)
+    fc_hz = min(max(FC_PER_CROSSOVER * wc / (2.0 * math.pi), 2.0), 50.0)
 
     u_of = lambda p: polarity * (p - p0) / m.kpa_per_u
     u_lo, u_hi = sorted((u_of(m.p_min_kpa), u_of(m.p_max_kpa)))
     u_start = u_of(m.static_map.hold_kpa(x_start))
     phi1 = mfac_phi1(ki * m.period_s)
+    # the reference feedforward: the static map's slope over the reachable band (the input per cm
+    # that holds the muscle a cm further, a least-squares line through the holding inputs), taken
+    # tau + theta ahead for the lag and dead time of the step responses
+    xs = np.linspace(*_ref_span(task, reach_lo, reach_hi), 9)
+    ref_ff = float(np.polyfit(xs, [u_of(m.static_map.hold_kpa(x)) for x in xs], 1)[0])
+    ref_ff_lead = tau + theta_eff
 
     w1_min = NOISE_SIGMAS_IN_W1 * m.noise_cm
     promises = [f"|e| < w1 = {task.w1_cm:g} cm needs w1 >= {w1_min:.4f} cm for this sensor's noise "
@@ -266,6 +320,8 @@ def derive(m: Measured, task: Task) -> Derivation:
         "ppc.ff_gain_per_s": round(r * k_p, 3),
         "ppc.ff_init": round(u_start, 2),
         "ppc.ref_vel": 1,
+        "ppc.ref_ff": round(ref_ff, 3),
+        "ppc.ref_ff_lead_s": round(ref_ff_lead, 4),
         "ppc.obs_pos": 1,
         "vel.kind": 1,
         "vel.fc_hz": round(fc_hz, 2),
