@@ -326,6 +326,7 @@ class Runner:
             lane.commissioning = jsonable({**result.report(), "control_ticks": bus.ticks})
             lane.rig = Rig(self.sc.rig_params(), seed=self.sc.seed)
             lane.seq = 0
+            lane.telem, lane.telem_row = {}, {}     # the run's telemetry starts at the run
         self.sc = dataclasses.replace(self.sc, controllers=[lane.ctrl for lane in self.lanes])
 
     @staticmethod
