@@ -23,7 +23,7 @@ from pmactl.commission_rules import Task
 
 from .offline_bus import OfflineBus
 from .reference import reference_function
-from .scenario import COMMISSION_TASK_PARAMS, COMMISSIONED_NODE_WIDE, Controller, Scenario, protocol
+from .scenario import COMMISSIONED_NODE_WIDE, Controller, Scenario, protocol
 
 # the rig's wiring and the user's limits: what a freshly wired node knows before commissioning
 USER_LIMITS = ("act.p_min_kpa", "act.p_max_kpa", "safety.x_min_cm", "safety.x_max_cm")
@@ -82,11 +82,12 @@ def commission(sc: Scenario, task: Task | None = None) -> Result:
 
 def derived_params(ctrl: Controller, derivation: dict[str, Any]) -> dict[str, Any]:
     """A commissioned lane's own parameters: the derivation's (Result.derivation.params) for its
-    mode, the node-wide input set-up (polarity, p0, input range), and the task's own from its
-    file."""
+    mode, the node-wide input set-up (polarity, p0, input range), and over them the lane's own:
+    from a file only the task's (COMMISSION_TASK_PARAMS, as the loader checks), plus whatever a
+    user set on the lane explicitly (`hil offline --set`)."""
     own: dict[str, Any] = {k: v for k, v in derivation.items() if k.startswith(DERIVED_BY_MODE[ctrl.mode])}
     own.update({k: derivation[k] for k in COMMISSIONED_NODE_WIDE})
-    own.update({k: ctrl.params[k] for k in COMMISSION_TASK_PARAMS if k in ctrl.params})
+    own.update(ctrl.params)
     return own
 
 

@@ -319,3 +319,19 @@ def test_scenario_lanes_take_their_set_from_commissioning(tmp_path: Path, capsys
     bad["controllers"] = [{"label": "pid", "mode": "PID", "commission": True}]
     with pytest.raises(scn.ScenarioError, match="commission = true needs mode"):
         scn.parse(bad)
+
+
+def test_an_explicit_set_wins_over_the_commissioned_value(tmp_path: Path):
+    """`hil offline --commission --set NAME=V`: the lane runs on the derivation with the user's
+    value on top (what the user asks for is what runs)."""
+    import json
+
+    from hil.__main__ import main as hil_main
+    code = hil_main(["offline", "case2b", "--controller", "ppc", "--duration", "2", "--commission", "--brief",
+                     "--set", "ppc.a_cm_s=1.5", "--out", str(tmp_path)])
+    assert code == 0
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    got = summary["controllers"]["ppc"]["params_set"]
+    assert got["ppc.a_cm_s"] == 1.5
+    assert got["ppc.ref_ff"] == json.loads((tmp_path / "commissioning.json").read_text())["derivation"]["params"][
+        "ppc.ref_ff"]

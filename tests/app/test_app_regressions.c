@@ -2,7 +2,8 @@
 /* Regression tests: bugs found in firmware/app by the test review, one test
  * each, with what was wrong (the line numbers refer to the code before the
  * fix) and how it was fixed. They failed before the fixes. */
-#define T_NVM_BPS 29u /* 464-byte slots: room for a blob 5 entries longer than this firmware's (BUG 3) */
+/* 16-byte blocks: room for a blob 5 entries longer than this firmware's and the record's 20 bytes (BUG 3) */
+#define T_NVM_BPS ((PMA_PARAMS_BLOB_BYTES + 5u * PMA_PARAMS_ENTRY_BYTES + 20u + 15u) / 16u)
 #include "app_test.h"
 
 #include "pstore.h"
@@ -96,7 +97,7 @@ static pma_pstore_t ps;
 
 /* Stores the defaults with ppc.c = 5, telem.mask = 7 and five entries of
  * ids this firmware does not know (200..204), as a newer firmware would. Its
- * own frame holds the 420-byte blob (the Cortex-M0 has no room for it in
+ * own frame holds the blob (the Cortex-M0 has no room for it in
  * .bss), released before the restart. */
 static void store_longer_blob(void)
 {

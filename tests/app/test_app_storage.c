@@ -8,7 +8,8 @@
  * RUNNING; LOAD restores the saved set; the heartbeat flags PARAMS_CHANGED,
  * PARAMS_DEFAULT, SAVE_FAILED; stored records that are corrupt, of another
  * blob version or holding a value out of range. */
-#define T_NVM_BPS 28u /* 448-byte slots: a 414-byte blob + 20 bytes of record */
+/* the smallest slot of 16-byte blocks that holds this firmware's blob and the record's 20 bytes */
+#define T_NVM_BPS ((PMA_PARAMS_BLOB_BYTES + 20u + 15u) / 16u)
 #include "app_test.h"
 
 #include "pstore.h"
