@@ -324,8 +324,7 @@ class Runner:
             lane.ctrl = with_derivation(lane.ctrl, result.derivation.params)
             lane.params = self.sc.node_params(lane.ctrl)
             lane.commissioning = jsonable({**result.report(), "control_ticks": bus.ticks})
-            lane.rig = Rig(self.sc.rig_params(), seed=self.sc.seed)
-            lane.seq = 0
+            lane.rig = Rig(self.sc.rig_params(), seed=self.sc.seed)     # (lane.seq goes on: the node counts it)
             lane.telem, lane.telem_row = {}, {}     # the run's telemetry starts at the run
         self.sc = dataclasses.replace(self.sc, controllers=[lane.ctrl for lane in self.lanes])
 

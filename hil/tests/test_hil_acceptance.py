@@ -164,7 +164,8 @@ def test_board_mode_drives_a_real_time_node(tmp_path):
     sc = scn.load("case1")
     sc.controllers = [c for c in sc.controllers if c.label == "ppc-paper"]
     sc.params.update({"sys.tick_hz": 50, "safety.sensor_timeout_ticks": 10000, "safety.host_timeout_ms": 60000,
-                      "safety.max_late_ticks": 1000, "safety.barrier_ticks": 0, "ppc.fallback": 0})
+                      "safety.max_late_ticks": 1000, "safety.barrier_ticks": 0, "ppc.fallback": 0,
+                      "vel.fc_hz": 5.0})    # below the 25 Hz Nyquist limit of the 50 Hz tick (START checks it)
     node = 5
     fw = FirmwareProcess(tmp_path, ["--node", str(node), "--watchdog-ms", "10000"]).start()
     try:
