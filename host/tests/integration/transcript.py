@@ -32,10 +32,11 @@ def normalize(lines: list[str]) -> list[str]:
             continue
         line = re.sub(r" in [\d.]+ s:", " in <wall> s:", line)
         # the build's git commit and dirty flag, and the unique id (from the storage file's
-        # path): the scan's columns; their widths follow, so runs of spaces count as one
+        # path): the scan's columns (and its header); their widths follow, so runs of spaces
+        # count as one
         line = re.sub(r"\b(\d+\.\d+\.\d+)\+[0-9a-f]{8}(-dirty)?", r"\1+<commit>", line)
         line = re.sub(r"\b[0-9a-f]{24}\b", "<unique id>", line)
-        if "<commit>" in line or "<unique id>" in line:
+        if "<commit>" in line or "<unique id>" in line or line.startswith("node  state  fault"):
             line = re.sub(r" {2,}", "  ", line)
         line = re.sub(r"\(\d+ frames\)", "(<n> frames)", line)
         out.append(line)
