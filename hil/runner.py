@@ -342,11 +342,7 @@ class Runner:
         """One control tick of one lane, not recorded (commissioning): its rig's sample out, the
         node's command in (its other frames go to the lane's sink), one rig period."""
         assert self.bus is not None
-        lane.seq = (lane.seq + 1) & 0xFF
-        data = self.proto.messages["PLANT_SENSOR"].encode({"Seq": lane.seq, "RawCounts": lane.rig.sensor_counts()},
-                                                           scaling=False)
-        self.send_frame(can.Message(arbitration_id=self.proto.frame_id("PLANT_SENSOR", lane.node), data=data,
-                                    is_extended_id=False, timestamp=time.time(), is_rx=False))
+        self._send_sample(lane)
         deadline = time.monotonic() + self.opts.reply_timeout_s
         while True:
             left = deadline - time.monotonic()
@@ -363,10 +359,21 @@ class Runner:
         lane.rig.step(self.period_s)
 
     def poll_lane(self, lane: Lane) -> None:
-        """The frames already received (the node's replies come without a tick)."""
+        """The frames already received, every lane's (the node's replies come without a tick;
+        `_receive` puts the lane's into its sink)."""
         assert self.bus is not None
         while (msg := self.bus.recv(0)) is not None:
             self._receive(msg)
+
+    def _send_sample(self, lane: Lane) -> int:
+        """The lane's next PLANT_SENSOR (sequence number + 1, the rig's sensor counts); returns
+        the counts."""
+        lane.seq = (lane.seq + 1) & 0xFF
+        counts = lane.rig.sensor_counts()
+        data = self.proto.messages["PLANT_SENSOR"].encode({"Seq": lane.seq, "RawCounts": counts}, scaling=False)
+        self.send_frame(can.Message(arbitration_id=self.proto.frame_id("PLANT_SENSOR", lane.node), data=data,
+                                    is_extended_id=False, timestamp=time.time(), is_rx=False))
+        return counts
 
     def send_frame(self, msg: can.Message) -> None:
         assert self.bus is not None
@@ -381,17 +388,8 @@ class Runner:
         assert self.bus is not None
         if self.opts.board:
             self._collect_repeats()
-        sensor_def = self.proto.messages["PLANT_SENSOR"]
         for lane in self.lanes:
-            lane.seq = (lane.seq + 1) & 0xFF
-            counts = lane.rig.sensor_counts()
-            data = sensor_def.encode({"Seq": lane.seq, "RawCounts": counts}, scaling=False)
-            msg = can.Message(arbitration_id=self.proto.frame_id("PLANT_SENSOR", lane.node), data=data,
-                              is_extended_id=False, timestamp=time.time(), is_rx=False)
-            self.bus.send(msg)
-            self._log(msg)
-            r = rec.data[lane.index]
-            r["counts"][rec.n] = counts
+            rec.data[lane.index]["counts"][rec.n] = self._send_sample(lane)
         pending = {lane.index for lane in self.lanes}
         prev_seq = {lane.index: (lane.seq - 1) & 0xFF for lane in self.lanes}
         deadline = time.monotonic() + self.opts.reply_timeout_s

@@ -19,6 +19,7 @@ import pytest
 import pmactl.commission_rules as rules
 from hil import offline
 from hil import scenario as scn
+from hil.commissioned import before_commissioning
 from hil.offline_bus import OfflineBus
 from pmactl import cli
 from pmactl.client import NodeStateError, PmaNode
@@ -169,13 +170,8 @@ def rig_node(request: pytest.FixtureRequest) -> Any:
     sc = scn.load(name)
     bus = OfflineBus(sc.rig_params(), node_id=1)
     node = PmaNode(bus, node=1, host_heartbeat_s=0.1)
-    wiring = sc.rig_params().firmware_scaling()
-    wiring.pop("act.p0_kpa")
-    proto = scn.protocol()
-    for k, v in wiring.items():
-        node.set(k, float(v) if proto.param(k).type == "f32" else int(round(v)))
-    for k in ("act.p_min_kpa", "act.p_max_kpa", "safety.x_min_cm", "safety.x_max_cm"):
-        node.set(k, sc.params[k])
+    for k, v in before_commissioning(sc).items():
+        node.set(k, v)
     bus.run_for(0.5)
     yield bus, node
     bus.shutdown()

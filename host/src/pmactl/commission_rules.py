@@ -264,11 +264,11 @@ def derive(m: Measured, task: Task) -> Derivation:
     tau = float(np.median([s.tau_s for s in m.steps]))
     theta = float(np.median([s.theta_s for s in m.steps]))
     theta_eff = theta + m.period_s             # one sample of the loop's own delay
-    shape = next((sh for sh in (_shape(gain, tau, theta_eff, k) for k in TAU_C_PER_THETA)
-                  if sh.margins["phase_margin_deg"] >= PM_MIN_DEG and sh.margins["gain_margin"] >= GM_MIN),
-                 None)
-    if shape is None:
-        shape = _shape(gain, tau, theta_eff, TAU_C_PER_THETA[-1])
+    for k in TAU_C_PER_THETA:       # the tightest first; the last is the most robust
+        shape = _shape(gain, tau, theta_eff, k)
+        if shape.margins["phase_margin_deg"] >= PM_MIN_DEG and shape.margins["gain_margin"] >= GM_MIN:
+            break
+    else:
         warnings.append(f"no loop keeps a phase margin of {PM_MIN_DEG:g} deg and a gain margin of {GM_MIN:g} on the "
                         "measured lag: the most robust one is used (see its margins)")
     tau_c, kc, tau_i, ki, r, k_p, k_v, margins = (shape.tau_c, shape.kc, shape.tau_i, shape.ki, FF_PER_KP,
