@@ -5,7 +5,9 @@ sources of truth, and checks that the committed copies are up to date.
 
   firmware/protocol/pma_proto.dbc  -> firmware/protocol/generated/pma_proto.{c,h}
                                       (cantools generate_c_source --use-round),
-                                      firmware/protocol/generated/pma_proto_version.h
+                                      firmware/protocol/generated/pma_proto_version.h,
+                                      firmware/app/generated/pma_proto_ties.h (the VAL_
+                                      tables tied to the firmware's enums)
   firmware/app/params.toml         -> firmware/app/generated/pma_param_table.{c,h}
                                       docs/parameters.md
 
@@ -260,11 +262,58 @@ def gen_proto_senders() -> str:
     return "".join(out)
 
 
+# The firmware's C names for the values of the DBC's VAL_ tables: (message, signal) -> the
+# prefix of the C constant for each label (the label appended). Every table listed here is
+# tied to its C enum by a _Static_assert per value (pma_proto_ties.h), so a value that changes
+# on one side only, or a label without a C constant, stops the build.
+ENUM_TIES: dict[tuple[str, str], str] = {
+    ("COMMAND", "Command"): "PMA_CMD_",
+    ("COMMAND_ACK", "Command"): "PMA_CMD_",
+    ("COMMAND_ACK", "State"): "PMA_STATE_",
+    ("COMMAND_ACK", "Result"): "PMA_ERR_",
+    ("PARAM_REQ", "Op"): "PMA_PARAM_OP_",
+    ("PARAM_REQ", "Type"): "PMA_PARAM_",
+    ("PARAM_RESP", "Op"): "PMA_PARAM_OP_",
+    ("PARAM_RESP", "Type"): "PMA_PARAM_",
+    ("PARAM_RESP", "Result"): "PMA_ERR_",
+    ("PLANT_ACTUATOR", "Sample"): "PMA_SAMPLE_",
+    ("HEARTBEAT", "State"): "PMA_STATE_",
+    ("HEARTBEAT", "FaultCode"): "PMA_FAULT_",
+    ("HEARTBEAT", "Controller"): "PMA_CTRL_MODE_",
+    ("HEARTBEAT", "Reference"): "PMA_REF_KIND_",
+    ("HEARTBEAT", "ResetCause"): "PMA_RESET_",
+}
+C_NAME_EXCEPTIONS = {("PMA_ERR_", "OK"): "PMA_OK"}
+
+
+def gen_enum_ties() -> str:
+    """_Static_asserts that tie each VAL_ table of ENUM_TIES to the firmware's C constants."""
+    db = cantools.database.load_file(str(DBC))
+    assert isinstance(db, cantools.database.can.Database)
+    out = [HEADER_NOTE.format(src="firmware/protocol/pma_proto.dbc"),
+           "#ifndef PMA_PROTO_TIES_H\n#define PMA_PROTO_TIES_H\n\n",
+           "/* Each value of the DBC's VAL_ tables is the firmware's constant of that name\n",
+           " * (tools/gen_protocol.py ENUM_TIES). Include after the headers that define them\n",
+           " * (app.h, supervisor.h, params.h, pma/status.h, pma/hal.h) and pma_proto.h. */\n"]
+    for (message, signal), prefix in ENUM_TIES.items():
+        sig = db.get_message_by_name(message).get_signal_by_name(signal)
+        if not sig.choices:
+            raise TableError(f"{message}.{signal} has no VAL_ table to tie to {prefix}*")
+        out.append(f"\n/* {message}.{signal} */\n")
+        for value, label in sorted(sig.choices.items()):
+            c_name = C_NAME_EXCEPTIONS.get((prefix, str(label)), prefix + str(label))
+            out.append(f"_Static_assert({c_name} == {int(value)}, "
+                       f"\"{message}.{signal} {label} is {int(value)} in the DBC\");\n")
+    out.append("\n#endif /* PMA_PROTO_TIES_H */\n")
+    return "".join(out)
+
+
 def outputs() -> dict[Path, str]:
     params = load_params()
     res = {PROTO_OUT / n: t for n, t in gen_codec().items()}
     res[PROTO_OUT / "pma_proto_version.h"] = gen_proto_version()
     res[PROTO_OUT / "pma_proto_senders.h"] = gen_proto_senders()
+    res[PARAM_OUT / "pma_proto_ties.h"] = gen_enum_ties()
     res[PARAM_OUT / "pma_param_table.h"] = gen_param_header(params)
     res[PARAM_OUT / "pma_param_table.c"] = gen_param_source(params)
     res[PARAM_DOC] = gen_param_doc(params)

@@ -310,6 +310,8 @@ static int select_param(pma_app_t *app, uint16_t id, uint8_t arg)
 int pma_app_command(pma_app_t *app, uint8_t command, uint8_t arg)
 {
     if (app == NULL) return PMA_ERR_NULL;
+    /* a reset is due at the end of this step: nothing may start meanwhile */
+    if (app->restart_pending && command != PMA_CMD_ESTOP) return PMA_ERR_STATE;
     switch (command) {
     case PMA_CMD_ARM:
         return cmd_arm(app);
@@ -343,6 +345,11 @@ int pma_app_command(pma_app_t *app, uint8_t command, uint8_t arg)
         return select_param(app, PMA_PARAM_CTRL_MODE, arg);
     case PMA_CMD_SELECT_REFERENCE:
         return select_param(app, PMA_PARAM_REF_KIND, arg);
+    case PMA_CMD_RESTART:
+        /* only with the output safe: a reset must not drop an active output */
+        if (output_active(app)) return PMA_ERR_STATE;
+        app->restart_pending = 1;
+        return PMA_OK;
     default:
         return PMA_ERR_UNKNOWN_COMMAND;
     }
@@ -593,5 +600,10 @@ int pma_app_step(pma_app_t *app)
     if (rc == PMA_OK) pma_app_tick(app, late);
     pma_app_poll(app);
     pma_hal_watchdog_kick();
+    if (app->restart_pending) {
+        /* RESTART: its COMMAND_ACK is queued; the port sends it, then resets */
+        app->restart_pending = 0;
+        pma_hal_system_reset();
+    }
     return rc == PMA_ERR_EMPTY ? PMA_OK : rc;
 }

@@ -54,6 +54,7 @@ typedef enum pma_command {
     PMA_CMD_CLEAR_FAULTS = 6,
     PMA_CMD_SELECT_CONTROLLER = 7, /* Arg: ctrl.mode */
     PMA_CMD_SELECT_REFERENCE = 8,  /* Arg: ref.kind */
+    PMA_CMD_RESTART = 9,           /* software reset after the reply; output inactive only */
 } pma_command_t;
 
 /* PARAM_REQ Op signal. */
@@ -179,6 +180,7 @@ typedef struct pma_app {
     uint8_t fault;                 /* pma_fault_t, latched */
     uint8_t node_id;
     uint8_t reset_cause;
+    uint8_t restart_pending;       /* RESTART accepted: pma_hal_system_reset() ends this step */
     /* storage */
     pma_pstore_t store;
     uint8_t store_ready, params_changed, params_default, save_failed;
@@ -235,13 +237,15 @@ void pma_app_tick(pma_app_t *app, uint32_t late_ticks);
 /* Housekeeping outside the tick: heartbeat (by pma_hal_time_us), CAN bus-off. */
 void pma_app_poll(pma_app_t *app);
 
-/* One main-loop iteration: tick_wait, frames, tick, poll, watchdog kick.
- * Returns PMA_OK, or the error of pma_hal_tick_wait() other than
+/* One main-loop iteration: tick_wait, frames, tick, poll, watchdog kick, and
+ * after an accepted RESTART (its COMMAND_ACK sent) pma_hal_system_reset(),
+ * which returns only on the fake and template ports. Returns PMA_OK, or the error of pma_hal_tick_wait() other than
  * PMA_ERR_EMPTY (e.g. PMA_ERR_NOT_READY). */
 int pma_app_step(pma_app_t *app);
 
 /* A command as if received in a COMMAND frame (no reply sent); returns its
- * result code. */
+ * result code. RESTART only schedules the reset for the end of the step;
+ * until then every other command but ESTOP is refused (PMA_ERR_STATE). */
 int pma_app_command(pma_app_t *app, uint8_t command, uint8_t arg);
 
 /* Latches a fault (the first one wins) and enters FAULT. */

@@ -16,6 +16,7 @@
 
 #include "app_internal.h"
 #include "generated/pma_proto.h"
+#include "generated/pma_proto_ties.h"
 
 /* Queues one of this node's frames; a frame the HAL does not take is counted. */
 static int send(pma_app_t *app, uint16_t base_id, uint8_t dlc, const uint8_t *data)

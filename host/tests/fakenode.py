@@ -80,6 +80,7 @@ class FakeNode:
     info_protocol_version: int | None = None  # DEVICE_INFO's ProtocolVersion (None: the DBC's)
     info_length: int = 8                      # DLC of the DEVICE_INFO frames it sends
     motion: str = "approach"         # telemetry: "approach" (x settles on x_r) or "sine" (x_r a 2 s sine)
+    restarts: bool = True            # RESTART works (False: UNKNOWN_COMMAND, as protocol < 4)
 
     def __post_init__(self) -> None:
         self.rows: dict[int, Row] = {}
@@ -96,6 +97,8 @@ class FakeNode:
         self.fault = 0
         self.changed = False
         self.counter = 0
+        self.reset_cause = 1                # POWER_ON
+        self.restart_due = False
         self.received: list[tuple[str, dict[str, Any]]] = []   # every frame handled, in order
         self.setpoints: list[float] = []
         self.host_heartbeats = 0
@@ -168,7 +171,7 @@ class FakeNode:
         self._send("HEARTBEAT", {
             "State": self.state, "FaultCode": self.fault, "Flags": self._flags(),
             "Controller": int(self.value("ctrl.mode")), "Reference": int(self.value("ref.kind")),
-            "ResetCause": 1, "Counter": self.counter})
+            "ResetCause": self.reset_cause, "Counter": self.counter})
         self.counter = (self.counter + 1) & 0xFF
 
     def _telemetry(self) -> None:
@@ -251,6 +254,8 @@ class FakeNode:
             res = self._command(int(sig["Command"]), int(sig["Arg"]))
             self._send("COMMAND_ACK", {"Command": sig["Command"], "Arg": sig["Arg"], "Result": res,
                                        "State": self.state})
+            if self.restart_due:
+                self._reboot()
         elif name == "PARAM_REQ" and self.answer:
             self._param(sig)
 
@@ -274,6 +279,20 @@ class FakeNode:
             data = (data + bytes(8))[: self.info_length]
             self.bus.send(can.Message(arbitration_id=fid, data=data, is_extended_id=False))
 
+    def _reboot(self) -> None:
+        """A software reset: RAM back to the saved set (or the defaults), the stored
+        sys.node_id in force, a BOOT heartbeat with ResetCause SOFTWARE, then IDLE."""
+        self.restart_due = False
+        for i, r in self.rows.items():
+            r.value = self.saved[i] if self.saved is not None else self._norm(r.type, r.default)
+        self.node = int(self.value("sys.node_id")) if self.saved is not None else self.node
+        self.changed = False
+        self.reset_cause = 3
+        self.counter = 0
+        self.state, self.fault = STATE["BOOT"], 0
+        self._heartbeat()
+        self.state = STATE["IDLE"]
+
     def _fault(self, fault: str) -> None:
         if self.state != STATE["FAULT"]:
             self.state, self.fault = STATE["FAULT"], FAULT[fault]
@@ -291,6 +310,11 @@ class FakeNode:
         if cmd in (CMD["SELECT_CONTROLLER"], CMD["SELECT_REFERENCE"]):
             p = PROTO.param("ctrl.mode" if cmd == CMD["SELECT_CONTROLLER"] else "ref.kind")
             return self._set(p.id, TYPE[p.type], arg)[0]
+        if cmd == CMD["RESTART"] and self.restarts:
+            if s in (STATE["ARMED"], STATE["RUNNING"]):
+                return RESULT["STATE"]
+            self.restart_due = True
+            return ok
         if s == STATE["FAULT"] and cmd in (CMD["ARM"], CMD["DISARM"], CMD["START"], CMD["STOP"]):
             return RESULT["FAULT"]
         if cmd == CMD["ARM"]:

@@ -5,12 +5,17 @@ through pmactl's command line, and two screenshots of the X display (PIL.ImageGr
 taken after frames FIRST and FIRST + GAP, counted in frames drawn, not in seconds.
 
     python scope_window.py OUT_DIR FIRST GAP        (DISPLAY names the X server)
+
+With `rate OUT_DIR SECONDS NODES` it measures instead: NODES fake nodes RUNNING, the scope
+drawing all of them for SECONDS s without screenshots; stats.json then holds the rate the
+scope reached (frames/s, its own count from the first frame drawn).
 """
 from __future__ import annotations
 
 import json
 import os
 import sys
+import time
 import uuid
 from pathlib import Path
 
@@ -56,5 +61,33 @@ def run(out: Path, first: int, gap: int) -> int:
     return code
 
 
+def rate(out: Path, seconds: float, nodes: int) -> int:
+    stats: dict[str, object] = {}
+
+    times: list[float] = []
+
+    def hook(sc: scope.Scope, frames: int) -> None:
+        times.append(time.monotonic())
+        stats.update(frames=frames, recent_fps=sc.rate(),
+                     mean_fps=(len(times) - 1) / (times[-1] - times[0]) if times[-1] > times[0] else 0.0)
+
+    scope.frame_hooks.append(hook)
+    channel = f"scope-rate-{uuid.uuid4().hex[:8]}"
+    fakes = [FakeNode(channel=channel, node=n + 1, motion="sine").__enter__() for n in range(nodes)]
+    try:
+        for f in fakes:
+            f.set_state("RUNNING")
+        code = main(["--interface", "virtual", "--channel", channel, "scope", "--host-heartbeat",
+                     "--nodes", ",".join(str(f.node) for f in fakes), "--window", "10",
+                     "--seconds", f"{seconds:g}"])
+    finally:
+        for f in fakes:
+            f.close()
+    (out / "stats.json").write_text(json.dumps(stats))
+    return code
+
+
 if __name__ == "__main__":
+    if sys.argv[1] == "rate":
+        sys.exit(rate(Path(sys.argv[2]), float(sys.argv[3]), int(sys.argv[4])))
     sys.exit(run(Path(sys.argv[1]), int(sys.argv[2]), int(sys.argv[3])))

@@ -21,7 +21,7 @@ def test_help_lists_commands_and_exit_codes(capsys: pytest.CaptureFixture[str]) 
     assert main(["--help"]) == 0
     out = capsys.readouterr().out
     for cmd in ("scan", "status", "params", "arm", "disarm", "start", "stop", "estop", "clear-faults",
-                "controller", "reference", "setpoint", "record", "plot", "monitor", "scope", "dbc"):
+                "restart", "controller", "reference", "setpoint", "record", "plot", "monitor", "scope", "dbc"):
         assert cmd in out
     for code in ("0 ", "1 ", "2 ", "3 ", "4 ", "5 "):
         assert f"\n  {code}" in out
@@ -371,6 +371,25 @@ def test_estop(pmactl, fake) -> None:
     r = pmactl("estop")
     assert r.code == EXIT_OK and r.out.strip() == "node 0: ESTOP sent, state FAULT (ESTOP)"
     assert ("ESTOP", {}) in n.received
+
+
+def test_restart_waits_for_the_node_and_says_what_was_lost(pmactl, fake) -> None:
+    n = fake(storage=True)
+    assert pmactl("params", "set", "ppc.w1_cm", "0.5").code == EXIT_OK   # not saved
+    r = pmactl("restart")
+    assert r.code == EXIT_OK, r.err
+    assert "node 0: restarted in" in r.out and "IDLE, reset cause SOFTWARE" in r.out
+    assert "unsaved parameter changes discarded" in r.out
+    assert n.value("ppc.w1_cm") == pytest.approx(0.2) and n.reset_cause == 3         # the default again
+
+
+def test_restart_refused_with_the_output_active_sends_nothing(pmactl, fake) -> None:
+    n = fake()
+    n.set_state("ARMED")
+    r = pmactl("restart")
+    assert r.code == EXIT_REFUSED and "node 0 is ARMED: disarm it first" in r.err
+    assert not [m for m, _ in n.received if m == "COMMAND"]
+    assert n.state == STATE["ARMED"]
 
 
 def test_estop_all(pmactl, fake) -> None:

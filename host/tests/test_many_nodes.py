@@ -78,12 +78,23 @@ def test_node_id_move_refuses_a_taken_id_and_an_active_node(pmactl, fake) -> Non
     assert a.value("sys.node_id") == 0
 
 
-def test_node_id_move_sets_and_saves_then_waits(pmactl, fake) -> None:
-    """The fake does not restart, so the move is set and saved and the wait ends without the
-    device on its new id (the full move, with a restart, runs against pma-fw-host)."""
+def test_node_id_move_sets_saves_restarts_and_verifies(pmactl, fake) -> None:
     a = fake(node=1, uid=bytes([1]) * 12, storage=True)
+    r = pmactl("--node", "1", "node-id", "6", "--wait", "5")
+    assert r.code == EXIT_OK, r.err
+    assert "sys.node_id = 6 set and saved; restarting it" in r.out
+    assert f"verified: the device {'01' * 12} answers on node id 6" in r.out
+    assert a.node == 6 and a.reset_cause == 3 and a.saved is not None
+    assert a.saved[PROTO.param("sys.node_id").id] == 6
+
+
+def test_node_id_move_without_restart_asks_for_one(pmactl, fake) -> None:
+    """A node that refuses RESTART (older firmware): the move is set and saved, the user is told
+    to restart it, and the wait ends without the device on its new id."""
+    a = fake(node=1, uid=bytes([1]) * 12, storage=True, restarts=False)
     r = pmactl("--node", "1", "node-id", "6", "--wait", "0.5")
     assert r.code == EXIT_NO_REPLY
-    assert "sys.node_id = 6 set and saved" in r.out and "did not answer on node id 6" in r.err
+    assert "sys.node_id = 6 set and saved" in r.out and "refused RESTART (UNKNOWN_COMMAND)" in r.out
+    assert "did not answer on node id 6" in r.err
     assert a.value("sys.node_id") == 6 and a.saved is not None
     assert a.saved[PROTO.param("sys.node_id").id] == 6

@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* The state machine through COMMAND frames, exactly as a host drives it:
  * every command (ARM, DISARM, START, STOP, ESTOP, CLEAR_FAULTS,
- * SELECT_CONTROLLER, SELECT_REFERENCE, undefined ones) in every state (IDLE,
+ * SELECT_CONTROLLER, SELECT_REFERENCE, RESTART, undefined ones) in every state (IDLE,
  * ARMED, RUNNING, FAULT; BOOT through pma_app_command), with the COMMAND_ACK
  * result and state; ESTOP and ESTOP_ALL frames from every state; the reasons
  * ARM and START are refused; malformed COMMAND frames; other nodes' frames.
@@ -54,9 +54,11 @@ static const expect_t table[] = {
      {PMA_ERR_RANGE, PMA_ERR_RANGE, PMA_ERR_RANGE, PMA_ERR_RANGE}, {I, A, R, F}},
     {PMA_CMD_SELECT_REFERENCE, 7 /* no such reference */,
      {PMA_ERR_RANGE, PMA_ERR_RANGE, PMA_ERR_RANGE, PMA_ERR_RANGE}, {I, A, R, F}},
+    /* RESTART only schedules the reset (the fake's is a no-op): test_app_storage.c */
+    {PMA_CMD_RESTART, 0, {PMA_OK, PMA_ERR_STATE, PMA_ERR_STATE, PMA_OK}, {I, A, R, F}},
     {0, 0, {PMA_ERR_UNKNOWN_COMMAND, PMA_ERR_UNKNOWN_COMMAND, PMA_ERR_UNKNOWN_COMMAND,
             PMA_ERR_UNKNOWN_COMMAND}, {I, A, R, F}},
-    {9, 1, {PMA_ERR_UNKNOWN_COMMAND, PMA_ERR_UNKNOWN_COMMAND, PMA_ERR_UNKNOWN_COMMAND,
+    {10, 1, {PMA_ERR_UNKNOWN_COMMAND, PMA_ERR_UNKNOWN_COMMAND, PMA_ERR_UNKNOWN_COMMAND,
             PMA_ERR_UNKNOWN_COMMAND}, {I, A, R, F}},
     {255, 255, {PMA_ERR_UNKNOWN_COMMAND, PMA_ERR_UNKNOWN_COMMAND, PMA_ERR_UNKNOWN_COMMAND,
                 PMA_ERR_UNKNOWN_COMMAND}, {I, A, R, F}},

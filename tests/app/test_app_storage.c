@@ -122,6 +122,56 @@ static void test_save_then_restart_loads(void)
     TEST_ASSERT_TRUE(params_are(&set_a));
 }
 
+/* RESTART over CAN: refused with the output active; accepted with it safe, the
+ * COMMAND_ACK sent first and the system reset requested at the end of that
+ * step, every later command of the step but ESTOP refused; the node starts
+ * again (reset cause SOFTWARE) with the saved set, the unsaved SET lost. */
+static void test_restart_command(void)
+{
+    to_armed(1);
+    command_ok(PMA_CMD_RESTART, 0, PMA_ERR_STATE);
+    assert_state(app.state, PMA_STATE_ARMED);
+    TEST_ASSERT_EQUAL_UINT32(0u, pma_fake_system_reset_requests());
+    command_ok(PMA_CMD_DISARM, 0, PMA_OK);
+    set_f32(PMA_PARAM_PPC_C, 6.0f);
+    save_ok();
+    set_f32(PMA_PARAM_PPC_C, 9.0f);                /* not saved */
+    /* RESTART, then ARM and ESTOP before the step ends (handled as the step does) */
+    static const uint8_t cmds[3][2] = {{PMA_CMD_RESTART, 0}, {PMA_CMD_ARM, 0}, {PMA_CMD_ESTOP, 0}};
+    static const int want[3] = {PMA_OK, PMA_ERR_STATE, PMA_OK};
+    for (int i = 0; i < 3; ++i) {
+        const pma_can_frame_t f = frame_of(PMA_PROTO_COMMAND_FRAME_ID, T_NODE, 2, cmds[i]);
+        cap_clear();
+        pma_app_handle_frame(&app, &f);
+        drain();
+        TEST_ASSERT_EQUAL_INT(1, sent(PMA_PROTO_COMMAND_ACK_FRAME_ID));
+        const pma_can_frame_t *r = last_frame(PMA_PROTO_COMMAND_ACK_FRAME_ID);
+        struct pma_proto_command_ack_t ack;
+        TEST_ASSERT_EQUAL_INT(0, pma_proto_command_ack_unpack(&ack, r->data, r->dlc));
+        TEST_ASSERT_EQUAL_INT(cmds[i][0], ack.command);
+        assert_status(ack.result, want[i]);
+        TEST_ASSERT_EQUAL_UINT32(0u, pma_fake_system_reset_requests()); /* not before the step ends */
+    }
+    send_sample((uint8_t)(app.bridge_seq + 1u), counts_at(-1.5f));
+    step();
+    TEST_ASSERT_EQUAL_UINT32(1u, pma_fake_system_reset_requests());
+    assert_state(app.state, PMA_STATE_FAULT);       /* the ESTOP; the output stayed safe */
+    TEST_ASSERT_EQUAL_INT(0, app.restart_pending);
+    /* the reset, as the board does it */
+    pma_fake_reboot();
+    assert_status(restart_app(), PMA_OK);
+    TEST_ASSERT_EQUAL_UINT32(0u, pma_fake_system_reset_requests());
+    const struct pma_proto_heartbeat_t h = last_heartbeat();
+    TEST_ASSERT_EQUAL_INT(PMA_STATE_BOOT, h.state);
+    TEST_ASSERT_EQUAL_INT(PMA_RESET_SOFTWARE, h.reset_cause);
+    assert_state(app.state, PMA_STATE_IDLE);         /* a software reset is no fault */
+    TEST_ASSERT_TRUE(app.params.ppc_c == 6.0f);
+    /* from FAULT, too */
+    command_ok(PMA_CMD_ESTOP, 0, PMA_OK);
+    command_ok(PMA_CMD_RESTART, 0, PMA_OK);
+    TEST_ASSERT_EQUAL_UINT32(1u, pma_fake_system_reset_requests());
+}
+
 /* sys.node_id takes effect at the next start-up (platform node id -1). */
 static void test_saved_node_id(void)
 {
@@ -480,6 +530,7 @@ int main(void)
 {
     UNITY_BEGIN();
     RUN_TEST(test_save_then_restart_loads);
+    RUN_TEST(test_restart_command);
     RUN_TEST(test_saved_node_id);
     RUN_TEST(test_power_cut_nothing_saved_before);
     RUN_TEST(test_power_cut_one_record);

@@ -184,6 +184,7 @@ void g4_cpu_wait_for_interrupt(void)
     }
 }
 
+void g4_cpu_system_reset(void) {} /* pma_hal_system_reset() is board-only (not linked here) */
 void g4_cpu_irq_disable(void) {}
 void g4_cpu_irq_enable(void) {}
 void g4_cpu_delay_cycles(uint32_t cycles)
@@ -520,6 +521,24 @@ static void test_can_send_through_the_interrupt(void)
     assert_status(g4_can_send(&f), PMA_ERR_BUS_OFF);
 }
 
+static void test_can_tx_idle_waits_for_the_ring_and_the_controller(void)
+{
+    can_up();
+    TEST_ASSERT_TRUE(g4_can_tx_idle());
+    r_fdcan1.TXFQS = 3u; /* 3 free, put index 0 */
+    const pma_can_frame_t f = frame(0x51u, 4u, 1u);
+    assert_status(g4_can_send(&f), PMA_OK);
+    TEST_ASSERT_FALSE(g4_can_tx_idle());        /* in the ring */
+    g4_can_isr();
+    r_fdcan1.TXBRP = r_fdcan1.TXBAR;            /* the controller has the request pending */
+    TEST_ASSERT_FALSE(g4_can_tx_idle());
+    r_fdcan1.TXBRP = 0u;                        /* sent */
+    TEST_ASSERT_TRUE(g4_can_tx_idle());
+    assert_status(g4_can_send(&f), PMA_OK);
+    r_fdcan1.CCCR |= 1u;                        /* INIT: off the bus (bus-off), it never drains */
+    TEST_ASSERT_TRUE(g4_can_tx_idle());
+}
+
 static void put_rx(uint32_t gi, uint32_t r0, uint32_t r1, uint32_t d0, uint32_t d1)
 {
     uint32_t *el = &r_mram[(G4_MRAM_F0SA + gi * 72u) / 4u];
@@ -773,6 +792,7 @@ int main(void)
     RUN_TEST(test_can_init_registers);
     RUN_TEST(test_can_filters);
     RUN_TEST(test_can_send_through_the_interrupt);
+    RUN_TEST(test_can_tx_idle_waits_for_the_ring_and_the_controller);
     RUN_TEST(test_can_receive_through_the_interrupt);
     RUN_TEST(test_can_error_states_and_recovery);
     RUN_TEST(test_flash_geometry);

@@ -68,7 +68,7 @@ def test_commands_in_idle(firmware, bus) -> None:
     for bad in (7, 200):
         expect(node, "SELECT_REFERENCE", bad, "RANGE", "IDLE")
     assert node.get("ref.kind") == 6
-    for unknown in (0, 9, 10, 128, 255):
+    for unknown in (0, 10, 11, 128, 255):
         expect(node, unknown, 0, "UNKNOWN_COMMAND", "IDLE")
         expect(node, unknown, 7, "UNKNOWN_COMMAND", "IDLE")
 
@@ -289,3 +289,32 @@ def test_heartbeat_boot_and_counter(firmware, bus) -> None:
         assert (h["State"], h["FaultCode"], h["Controller"], h["Reference"]) == (STATE["IDLE"], 0, 1, 0), h
         assert h["Flags"] == 0x0016, hex(h["Flags"])   # PLANT_BRIDGE, LOCKSTEP, PARAMS_DEFAULT
     fw.stop()
+
+
+def test_restart_re_executes_the_node(firmware, bus) -> None:
+    """RESTART: refused with the output active; from IDLE the node answers, then re-executes
+    itself (the same process), comes back through BOOT with ResetCause SOFTWARE and the saved
+    parameters, the unsaved change gone; from FAULT it comes back IDLE."""
+    fw, node = start(firmware, bus, node=NODE)
+    pid = fw.proc.pid
+    node.set("ppc.c", 7.0)
+    node.save()
+    node.set("ppc.c", 9.0)                                  # not saved: lost at the restart
+    rig = arm(node)
+    expect(node, "RESTART", 0, "STATE", "ARMED")
+    assert rig.tick()["OutputActive"] == 1                  # still running its output
+    node.disarm()
+    for before in ("IDLE", "FAULT"):
+        if before == "FAULT":
+            node.command("ESTOP")
+        ack = node.command("RESTART")
+        assert PROTO.state_names[ack.state] == before
+        boot = node.wait_for("HEARTBEAT", lambda s: s["State"] == STATE["BOOT"], timeout_s=10)
+        assert PROTO._choices("HEARTBEAT", "ResetCause")[boot["ResetCause"]] == "SOFTWARE"
+        assert boot["Counter"] == 0
+        hb = fresh_heartbeat(node)
+        assert (hb["State"], hb["FaultCode"]) == (STATE["IDLE"], FAULT["NONE"]), hb
+        assert fw.proc.poll() is None and fw.proc.pid == pid
+        assert node.get("ppc.c") == 7.0
+    assert fw.stop() == 0
+    assert fw.output().count("software reset: re-executing") == 2

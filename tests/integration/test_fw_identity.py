@@ -113,36 +113,27 @@ def test_pmactl_scan_reports_the_duplicate(firmware, bus: can.BusABC, proto: Pro
 
 def test_pmactl_moves_a_node_to_another_id(bus: can.BusABC, proto: Protocol, tmp_path: Path,
                                            capsys: pytest.CaptureFixture[str]) -> None:
-    """set, save, restart, verify: the node (started without --node, so its stored sys.node_id
-    counts) answers on the new id after its restart, with the same unique id."""
-    import threading
-
+    """set, save, RESTART, verify: the node (started without --node, so its stored sys.node_id
+    counts) restarts itself (the same process, re-executed) and answers on the new id, with the
+    same unique id and reset cause SOFTWARE."""
     from hil.fw_process import FirmwareProcess
 
     store = tmp_path / "move.nvm"
     args = ["--storage", str(store), "--lockstep", "--watchdog-ms", "10000"]
     fw = FirmwareProcess(tmp_path, args).start()
     try:
+        assert fw.proc is not None
+        pid = fw.proc.pid
         PmaNode(bus, 0, proto, timeout_s=5.0).heartbeat(timeout_s=10.0)
-        codes: list[int] = []
-        t = threading.Thread(target=lambda: codes.append(cli.main(
-            ["--interface", "socketcan", "--channel", CHANNEL, "--node", "0", "node-id", "9",
-             "--wait", "60"])))
-        t.start()
-        watch = PmaNode(bus, 0, proto, timeout_s=2.0)
-        # the restart, once the new id is saved (PARAMS_CHANGED cleared after SET + SAVE)
-        saved = False
-        for _ in range(200):
-            st = watch.status(timeout_s=2.0)
-            if "PARAMS_CHANGED" not in st.flag_names and watch.get("sys.node_id") == 9:
-                saved = True
-                break
-        assert saved
-        fw.stop()
-        fw = FirmwareProcess(tmp_path, args).start()
-        t.join(90)
+        code = cli.main(["--interface", "socketcan", "--channel", CHANNEL, "--node", "0", "node-id",
+                         "9", "--wait", "60"])
         out, err = capsys.readouterr()
-        assert codes == [cli.EXIT_OK], (out, err)
+        assert code == cli.EXIT_OK, (out, err)
+        assert "sys.node_id = 9 set and saved; restarting it" in out
         assert "verified: the device" in out and "answers on node id 9" in out
+        st = PmaNode(bus, 9, proto, timeout_s=5.0).wait_state("IDLE", timeout_s=10.0)
+        assert st.reset_cause_name == "SOFTWARE"
+        assert fw.proc.poll() is None and fw.proc.pid == pid
     finally:
         fw.stop()
+    assert "software reset: re-executing" in fw.output()

@@ -5,6 +5,6 @@
 
 /* The protocol version: the number of the DBC's VERSION line (DEVICE_INFO's
  * ProtocolVersion). */
-#define PMA_PROTO_VERSION 3u
+#define PMA_PROTO_VERSION 4u
 
 #endif /* PMA_PROTO_VERSION_H */

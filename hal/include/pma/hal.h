@@ -211,4 +211,21 @@ void pma_hal_watchdog_kick(void);
 /* Why the program last started (latched at start-up). */
 pma_reset_cause_t pma_hal_reset_cause(void);
 
+/* --------------------------------------------------------------- reset -- */
+
+/* Longest wait of pma_hal_system_reset() for queued CAN frames to leave. */
+#define PMA_HAL_RESET_TX_FLUSH_US 20000u
+
+/* A software reset of the program: waits until the CAN frames already queued
+ * by pma_hal_can_send() have left (at most PMA_HAL_RESET_TX_FLUSH_US: a
+ * bus-off controller sends nothing), then restarts the program from the
+ * beginning, as a reset would; pma_hal_reset_cause() then reads
+ * PMA_RESET_SOFTWARE. A port that can reset does not return (the board: the
+ * Cortex-M system reset; the Linux port: it re-executes the program with the
+ * argv given at pma_hal_init(), or exits with PMA_HAL_LINUX_EXIT_RESET
+ * without one). The fake records the request and returns (the test then
+ * calls pma_fake_reboot()); the template returns. The caller must have put
+ * the output in its safe state first. */
+void pma_hal_system_reset(void);
+
 #endif /* PMA_HAL_H */

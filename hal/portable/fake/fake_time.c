@@ -20,6 +20,7 @@ static struct {
     uint64_t wd_kick_us;         /* last kick (or start) */
     pma_reset_cause_t reset_cause;   /* reported now */
     pma_reset_cause_t next_cause;    /* latched at the next restart */
+    uint32_t reset_requests;         /* pma_hal_system_reset() calls since the last restart */
 } t = {.reset_cause = PMA_RESET_POWER_ON, .next_cause = PMA_RESET_POWER_ON};
 
 void pma_fake_set_reset_cause_(pma_reset_cause_t cause)
@@ -35,6 +36,7 @@ void pma_fake_time_reset_(pma_fake_reset_depth_t depth)
         t.wd_running = false;
         t.wd_expired = false;
         t.reset_cause = t.next_cause;
+        t.reset_requests = 0;
     }
     if (depth >= PMA_FAKE_RESET_ALL) {
         t.now_us = 0;
@@ -124,6 +126,16 @@ void pma_hal_watchdog_kick(void)
 pma_reset_cause_t pma_hal_reset_cause(void)
 {
     return t.reset_cause;
+}
+
+void pma_hal_system_reset(void)
+{
+    ++t.reset_requests; /* the frames already sent are in the TX log: nothing to wait for */
+}
+
+uint32_t pma_fake_system_reset_requests(void)
+{
+    return t.reset_requests;
 }
 
 bool pma_fake_watchdog_expired(void)

@@ -81,6 +81,13 @@ void pma_fake_tick_grant(void);
 bool pma_fake_watchdog_expired(void);
 bool pma_fake_watchdog_running(void);
 
+/* ----------------------------------------------------------------- reset -- */
+
+/* pma_hal_system_reset() calls since the last restart: the fake's system
+ * reset only counts; the test restarts the MCU with pma_fake_reboot(), whose
+ * reset cause is then SOFTWARE. */
+uint32_t pma_fake_system_reset_requests(void);
+
 /* ------------------------------------------------------------------- ADC -- */
 
 /* The sensor's true output, read by pma_hal_adc_read() unless a fault is set. */

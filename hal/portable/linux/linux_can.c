@@ -31,8 +31,10 @@
 #include <poll.h>
 #include <stdio.h>
 #include <string.h>
+#include <linux/sockios.h>
 #include <sys/ioctl.h>
 #include <sys/socket.h>
+#include <time.h>
 #include <unistd.h>
 
 /* Error classes that change the fault confinement state. Not CAN_ERR_PROT or
@@ -315,6 +317,19 @@ void pma_linux_can_close(void)
     can.socket_drops = 0;
     can.tick_armed = false;
     can.ticks_pending = 0;
+}
+
+void pma_linux_can_flush(uint32_t max_us)
+{
+    if (can.fd < 0) return;
+    const uint64_t deadline_us = pma_hal_time_us() + max_us;
+    int unsent = 0;
+    /* SIOCOUTQ: bytes still in the socket's send queue (the interface has not
+     * taken them); vcan takes every frame at write() */
+    while (ioctl(can.fd, SIOCOUTQ, &unsent) == 0 && unsent > 0 && pma_hal_time_us() < deadline_us) {
+        const struct timespec ms = {.tv_sec = 0, .tv_nsec = 1000000L};
+        (void)nanosleep(&ms, NULL);
+    }
 }
 
 void pma_linux_can_tick_arm(void)

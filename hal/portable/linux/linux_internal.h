@@ -77,6 +77,9 @@ void pma_linux_can_err_apply(pma_linux_can_err_t *e, uint32_t can_id, const uint
 void pma_linux_can_err_recovered(pma_linux_can_err_t *e);
 pma_can_state_t pma_linux_can_err_state(const pma_linux_can_err_t *e);
 
+/* Waits until the socket's send queue is empty, at most max_us. */
+void pma_linux_can_flush(uint32_t max_us);
+
 /* ---------------------------------------------------------------- time -- */
 
 /* Stops the tick and selects its source for the next pma_hal_tick_start(). */

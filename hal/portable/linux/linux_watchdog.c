@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Linux port: a software watchdog and the reset cause.
+/* Linux port: a software watchdog, the reset cause and the system reset.
  *
  * The watchdog is a thread (started by the first pma_hal_watchdog_start(),
  * never stopped) that sleeps until the last kick plus the timeout. When it
@@ -12,7 +12,13 @@
  * it early.
  *
  * The thread runs on a static stack (glibc keeps the thread's descriptor in
- * it too), so the port allocates no memory for it. */
+ * it too), so the port allocates no memory for it.
+ *
+ * pma_hal_system_reset() resets the same way from the main thread, with
+ * PMA_HAL_LINUX_RESET_CAUSE=SOFTWARE, after the CAN send queue has drained;
+ * without argv it _exit()s with PMA_HAL_LINUX_EXIT_RESET. The re-executed
+ * program opens the CAN socket and the storage file again (every descriptor
+ * is close-on-exec, so the file's lock goes with the old image). */
 #define _GNU_SOURCE
 
 #include "linux_internal.h"
@@ -47,7 +53,8 @@ static struct {
 
 static _Alignas(4096) unsigned char thread_stack[THREAD_STACK_BYTES];
 static char *env_out[ENV_MAX];
-static char env_cause[] = PMA_HAL_LINUX_RESET_CAUSE_ENV "=WATCHDOG";
+static char env_watchdog[] = PMA_HAL_LINUX_RESET_CAUSE_ENV "=WATCHDOG";
+static char env_software[] = PMA_HAL_LINUX_RESET_CAUSE_ENV "=SOFTWARE";
 
 /* ------------------------------------------------------------ reset cause -- */
 
@@ -94,7 +101,7 @@ void pma_linux_watchdog_set_argv(char *const *argv)
 }
 
 /* The environment for the re-executed program: ours, with the reset cause. */
-static char **reset_environment(void)
+static char **reset_environment(char *cause)
 {
     const size_t prefix_len = strlen(PMA_HAL_LINUX_RESET_CAUSE_ENV "=");
     size_t n = 0;
@@ -103,7 +110,7 @@ static char **reset_environment(void)
         if (n + 2u > ENV_MAX) return NULL;
         env_out[n++] = *e;
     }
-    env_out[n++] = env_cause;
+    env_out[n++] = cause;
     env_out[n] = NULL;
     return env_out;
 }
@@ -118,6 +125,25 @@ static void say(const char *msg, int len, size_t capacity)
     }
 }
 
+/* Re-executes the program with the reset cause `cause` (or exits with
+ * exit_status without argv); never returns. */
+static void reexecute(char *const *argv, char *cause, int exit_status)
+{
+    char msg[200];
+    if (argv != NULL) {
+        char **env = reset_environment(cause);
+        if (env != NULL) {
+            (void)pthread_sigmask(SIG_SETMASK, &wd.exec_mask, NULL);
+            (void)execve("/proc/self/exe", argv, env);
+        }
+        say(msg,
+            snprintf(msg, sizeof msg, "pma_hal_linux: reset: cannot re-execute: %s\n",
+                     env != NULL ? strerror(errno) : "environment too large"),
+            sizeof msg);
+    }
+    _exit(exit_status);
+}
+
 /* Called with wd.lock held; never returns. */
 static void expire(void)
 {
@@ -129,18 +155,21 @@ static void expire(void)
                  wd.argv != NULL ? "resetting (re-executing /proc/self/exe)"
                                  : "exiting (no argv to re-execute)"),
         sizeof msg);
-    if (wd.argv != NULL) {
-        char **env = reset_environment();
-        if (env != NULL) {
-            (void)pthread_sigmask(SIG_SETMASK, &wd.exec_mask, NULL);
-            (void)execve("/proc/self/exe", wd.argv, env);
-        }
-        say(msg,
-            snprintf(msg, sizeof msg, "pma_hal_linux: watchdog: cannot re-execute: %s\n",
-                     env != NULL ? strerror(errno) : "environment too large"),
-            sizeof msg);
-    }
-    _exit(PMA_HAL_LINUX_EXIT_WATCHDOG);
+    reexecute(wd.argv, env_watchdog, PMA_HAL_LINUX_EXIT_WATCHDOG);
+}
+
+void pma_hal_system_reset(void)
+{
+    pma_linux_can_flush(PMA_HAL_RESET_TX_FLUSH_US);
+    pthread_mutex_lock(&wd.lock); /* the watchdog thread must not re-execute meanwhile */
+    char *const *argv = wd.argv;
+    if (!wd.thread_started) (void)pthread_sigmask(SIG_SETMASK, NULL, &wd.exec_mask);
+    char msg[120];
+    say(msg,
+        snprintf(msg, sizeof msg, "pma_hal_linux: software reset: %s\n",
+                 argv != NULL ? "re-executing /proc/self/exe" : "exiting (no argv to re-execute)"),
+        sizeof msg);
+    reexecute(argv, env_software, PMA_HAL_LINUX_EXIT_RESET);
 }
 
 static void *watchdog_main(void *arg)

@@ -50,10 +50,11 @@
  * 128 + signal numbers and of hil/with-vcan's 2 and 125). */
 #define PMA_HAL_LINUX_EXIT_WATCHDOG 84   /* watchdog expired and no argv to re-execute */
 #define PMA_HAL_LINUX_EXIT_POWER_CUT 85  /* the nvm_cut_after_ops test hook cut the power */
+#define PMA_HAL_LINUX_EXIT_RESET 86      /* pma_hal_system_reset() and no argv to re-execute */
 
-/* Environment variable carrying the reset cause across the watchdog's
- * re-execution: "WATCHDOG" (what the port sets), also "POWER_ON",
- * "SOFTWARE", "PIN", "BROWNOUT"; anything else reads as PMA_RESET_UNKNOWN,
+/* Environment variable carrying the reset cause across a re-execution:
+ * "WATCHDOG" and "SOFTWARE" (what the port sets: the watchdog, and
+ * pma_hal_system_reset()), also "POWER_ON", "PIN", "BROWNOUT"; anything else reads as PMA_RESET_UNKNOWN,
  * absent as PMA_RESET_POWER_ON. The port reads and removes it (unsetenv) at
  * the first pma_hal_init() or pma_hal_reset_cause(), whichever comes first. */
 #define PMA_HAL_LINUX_RESET_CAUSE_ENV "PMA_HAL_LINUX_RESET_CAUSE"
@@ -80,9 +81,10 @@ typedef struct pma_hal_linux_config {
                                       bytes (synced to the file), then the process _exit()s
                                       with PMA_HAL_LINUX_EXIT_POWER_CUT, as a power cut would */
     uint32_t nvm_cut_permille;     /* 0..1000, see above (0: none of the bytes) */
-    char *const *argv;             /* main's argv (must stay valid): the watchdog re-executes
-                                      /proc/self/exe with it; NULL: the watchdog _exit()s with
-                                      PMA_HAL_LINUX_EXIT_WATCHDOG instead */
+    char *const *argv;             /* main's argv (must stay valid): the watchdog and
+                                      pma_hal_system_reset() re-execute /proc/self/exe with it;
+                                      NULL: they _exit() with PMA_HAL_LINUX_EXIT_WATCHDOG /
+                                      PMA_HAL_LINUX_EXIT_RESET instead */
     int no_can;                    /* 1: no CAN device (can_ifname ignored, CAN functions return
                                       PMA_ERR_NOT_IMPLEMENTED; not with lockstep): for programs and
                                       tests of the other devices on kernels without SocketCAN */

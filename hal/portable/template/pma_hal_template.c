@@ -7,7 +7,8 @@
  * functions that cannot fail do nothing or return a neutral value:
  *   pma_hal_deinit, pma_hal_watchdog_kick: nothing;
  *   pma_hal_time_us: 0 (a real port must count);
- *   pma_hal_reset_cause: PMA_RESET_UNKNOWN.
+ *   pma_hal_reset_cause: PMA_RESET_UNKNOWN;
+ *   pma_hal_system_reset: returns (a port must reset the MCU here).
  *
  * It is compiled on every preset (library `pma_hal_template`) so that the
  * interface and this file cannot drift apart, and tests/hal/test_hal_template.c
@@ -139,4 +140,8 @@ void pma_hal_watchdog_kick(void)
 pma_reset_cause_t pma_hal_reset_cause(void)
 {
     return PMA_RESET_UNKNOWN;
+}
+
+void pma_hal_system_reset(void)
+{
 }

@@ -236,9 +236,13 @@ def build_parser() -> argparse.ArgumentParser:
                        ("clear-faults", "FAULT -> IDLE: clear the latched fault")):
         add(name, text)
     add("estop", "emergency stop: the node (or with --all every node, ESTOP_ALL) enters FAULT")
+    p = add("restart", "software reset of the node (output inactive only: IDLE or FAULT); "
+                       "unsaved parameter changes are lost; waits until it is back")
+    p.add_argument("--wait", type=_positive, default=10.0, metavar="S",
+                   help="how long to wait for the node to come back (default 10 s)")
     p = add("node-id", "move the node to another node id safely: checks that no device answers "
-                       "on NEW, sets and saves sys.node_id, waits for the node (same unique id) "
-                       "to come back on NEW after its restart")
+                       "on NEW, sets and saves sys.node_id, restarts the node (RESTART) and "
+                       "verifies that the same device (unique id) answers on NEW")
     p.add_argument("new_id", type=_node_id, metavar="NEW", help="the new node id, 0..15")
     p.add_argument("--wait", type=_positive, default=60.0, metavar="S",
                    help="how long to wait for the restarted node on NEW (default 60 s)")
@@ -693,6 +697,20 @@ def cmd_estop(s: Session) -> int:
     return EXIT_OK
 
 
+def cmd_restart(s: Session) -> int:
+    node = s.node
+    st = node.status()
+    if st.state_name not in ("IDLE", "FAULT", "BOOT"):
+        raise NodeStateError(f"node {node.node} is {st.state_name}: disarm it first (a restart "
+                             f"needs the output inactive); nothing sent")
+    t0 = time.monotonic()
+    back = node.restart(timeout_s=s.args.wait)
+    s.out(f"node {node.node}: restarted in {time.monotonic() - t0:.2f} s: {back.state_name}, "
+          f"reset cause {back.reset_cause_name}"
+          + (", unsaved parameter changes discarded" if "PARAMS_CHANGED" in st.flag_names else ""))
+    return EXIT_OK
+
+
 def cmd_node_id(s: Session) -> int:
     node = s.node
     old, new = node.node, s.args.new_id
@@ -712,8 +730,14 @@ def cmd_node_id(s: Session) -> int:
                              f"change only with the output inactive); nothing changed")
     node.set("sys.node_id", new)
     node.save()
-    s.out(f"node {old} (unique id {dev.uid_hex}): sys.node_id = {new} set and saved; restart the "
-          f"node now (power cycle or reset) to apply it")
+    ack = node.command("RESTART", check=False)
+    if ack.result == 0:
+        s.out(f"node {old} (unique id {dev.uid_hex}): sys.node_id = {new} set and saved; "
+              f"restarting it")
+    else:                                   # firmware without RESTART (protocol < 4)
+        s.out(f"node {old} (unique id {dev.uid_hex}): sys.node_id = {new} set and saved; it "
+              f"refused RESTART ({s.proto.status_name(ack.result)}): restart the node now "
+              f"(power cycle or reset) to apply it")
     deadline = time.monotonic() + s.args.wait
     moved = PmaNode(node.bus, new, s.proto, timeout_s=s.args.timeout)
     while time.monotonic() < deadline:
@@ -955,7 +979,7 @@ COMMANDS: dict[str, Callable[[Session], int]] = {
     "scan": cmd_scan, "status": cmd_status, "info": cmd_info,
     "params": lambda s: PARAMS_COMMANDS[s.args.params_command](s),
     "arm": cmd_command, "disarm": cmd_command, "start": cmd_command, "stop": cmd_command,
-    "clear-faults": cmd_command, "estop": cmd_estop, "controller": cmd_select,
+    "clear-faults": cmd_command, "estop": cmd_estop, "restart": cmd_restart, "controller": cmd_select,
     "reference": cmd_select, "setpoint": cmd_setpoint, "record": cmd_record, "plot": cmd_plot,
     "monitor": cmd_monitor, "node-id": cmd_node_id, "dbc": cmd_dbc, "scope": cmd_scope,
     "commission": lambda s: cmd_commission(s),

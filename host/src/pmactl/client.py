@@ -373,6 +373,16 @@ class PmaNode:
     def stop(self) -> Ack: return self.command("STOP")
     def clear_faults(self) -> Ack: return self.command("CLEAR_FAULTS")
 
+    def restart(self, timeout_s: float = 10.0) -> Status:
+        """RESTART: a software reset of the node (only with its output inactive; unsaved
+        parameter changes are lost). Returns the first heartbeat after its start-up (BOOT),
+        once it is out of BOOT; NoReply if it does not come back within timeout_s."""
+        self.command("RESTART")
+        boot = {v: k for k, v in self.proto.state_names.items()}["BOOT"]
+        self.wait_for("HEARTBEAT", lambda s: s["State"] == boot, timeout_s=timeout_s)
+        sig = self.wait_for("HEARTBEAT", lambda s: s["State"] != boot, timeout_s=timeout_s)
+        return Status.from_signals(self.proto, self.node, sig)
+
     def estop(self, all_nodes: bool = False) -> None:
         """Emergency stop (no reply: watch the heartbeat)."""
         self.send("ESTOP_ALL" if all_nodes else "ESTOP")

@@ -41,3 +41,8 @@ void g4_w1c(volatile uint32_t *reg, uint32_t bits)
 {
     *reg = bits;
 }
+
+void g4_cpu_system_reset(void)
+{
+    NVIC_SystemReset(); /* CMSIS-Core: DSB, AIRCR.SYSRESETREQ, wait; never returns */
+}

@@ -106,6 +106,9 @@ int g4_can_set_filters(const pma_can_filter_t *filters, size_t count);
 int g4_can_status(pma_can_status_t *status);
 int g4_can_recover(void);
 void g4_can_isr(void);
+/* 1 when no frame waits to be sent (the TX ring empty, no transmission request
+ * pending in the controller) or the controller is off the bus. */
+int g4_can_tx_idle(void);
 
 /* ------------------------------------------------------------------ NVM -- */
 /* The last two flash pages: bank 2 pages 126 and 127 (2 KB, dual-bank, the

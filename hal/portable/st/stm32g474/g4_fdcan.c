@@ -217,6 +217,12 @@ int g4_can_send(const pma_can_frame_t *frame)
     return PMA_OK;
 }
 
+int g4_can_tx_idle(void)
+{
+    if (!can_up || READ_BIT(g4_io.fdcan1->CCCR, FDCAN_CCCR_INIT)) return 1; /* off the bus: sends nothing */
+    return tx.tail == tx.head && READ_REG(g4_io.fdcan1->TXBRP) == 0u;
+}
+
 int g4_can_recv(pma_can_frame_t *frame)
 {
     if (frame == NULL) return PMA_ERR_NULL;

@@ -61,5 +61,6 @@ void g4_nvic_enable(IRQn_Type irq, uint8_t priority);
 void g4_nvic_disable(IRQn_Type irq);
 void g4_nvic_set_pending(IRQn_Type irq);
 void g4_cpu_delay_cycles(uint32_t cycles);
+void g4_cpu_system_reset(void); /* the Cortex-M system reset (SCB AIRCR SYSRESETREQ) */
 
 #endif /* G4_IO_H */

@@ -172,6 +172,15 @@ pma_reset_cause_t pma_hal_reset_cause(void)
     return reset_cause;
 }
 
+void pma_hal_system_reset(void)
+{
+    const uint64_t deadline_us = g4_time_us() + PMA_HAL_RESET_TX_FLUSH_US;
+    while (!g4_can_tx_idle() && g4_time_us() < deadline_us) {
+        g4_iwdg_kick(); /* the wait is bounded: the watchdog must not cut it short */
+    }
+    g4_cpu_system_reset(); /* RCC_CSR SFTRSTF: the next start reads PMA_RESET_SOFTWARE */
+}
+
 void pma_hal_stm32g474_device_uid(uint8_t uid[PMA_HAL_STM32G474_UID_BYTES])
 {
     for (unsigned k = 0; k < PMA_HAL_STM32G474_UID_BYTES; ++k) uid[k] = g4_io.uid[k];
