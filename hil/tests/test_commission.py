@@ -51,6 +51,30 @@ def test_fit_step_finds_a_known_fopdt():
     assert f.theta_s == pytest.approx(theta, abs=0.004)
 
 
+def test_first_movement_shows_the_dead_time_a_slow_tail_hides():
+    """A response with a dead time, a fast part and a slow tail (creep, a slow valve stage):
+    the two-point fit, dominated by the tail, puts its dead time near zero; the first movement
+    finds the dead time, and the rules take that."""
+    rng = np.random.default_rng(2)
+    t = np.arange(0.0, 1.0, 1e-3)
+    theta, dp, noise = 0.035, -45.0, 1.4e-3
+    moving = np.where(t > theta, 1.0, 0.0)
+    shape = moving * (0.3 * (1 - np.exp(-(t - theta) / 0.02)) + 0.7 * (1 - np.exp(-(t - theta) / 0.35)))
+    x = -1.0 + 0.19 * shape + rng.normal(0, noise, t.size)
+    f = fit_step(t, x, 300.0, dp, noise_cm=noise)
+    assert f.theta_s < 0.01                                 # what the fit alone would give
+    assert f.first_move_s == pytest.approx(theta, abs=0.006)
+    assert math.isnan(fit_step(t, x, 300.0, dp).first_move_s)      # no noise given: not measured
+    small = -1.0 + 5 * noise * shape + rng.normal(0, noise, t.size)
+    assert math.isnan(fit_step(t, small, 300.0, dp, noise_cm=noise).first_move_s)   # too small to tell
+    m = _measured(theta=0.0, tau=0.2)
+    for s in m.steps:
+        s.first_move_s = f.first_move_s
+    d = derive(m, TASK)
+    assert d.figures["theta_s"] == pytest.approx(f.first_move_s) and d.figures["theta_fit_s"] == 0.0
+    assert d.figures["kc_u_per_cm"] < derive(_measured(theta=0.0, tau=0.2), TASK).figures["kc_u_per_cm"]
+
+
 def test_fit_step_refuses_a_flat_or_short_record():
     t = np.arange(0.0, 1.0, 1e-3)
     with pytest.raises(CommissionError):

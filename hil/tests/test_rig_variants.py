@@ -97,14 +97,7 @@ def test_guarantee_holds_where_feasible_or_its_loss_is_flagged(variant_runs, nam
         assert c["fallback_at_s"] == lost
 
 
-# The open point of the rules (docs/commissioning.md, "Measured"): on the flow-limited ITV2050
-# valve the loop the step responses suggest hunts (its small steps answer at once, its large
-# ones slowly), 0.07 cm against MFAC's 0.002 cm. Strict: the test fails once the rules fix it.
-_OPEN = {"case3_profile_mas10_itv2050": "the rules' loop hunts on the flow-limited ITV2050 valve"}
-
-
-@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.xfail(strict=True, reason=_OPEN[n]))
-                                  if n in _OPEN else n for n in VARIANTS])
+@pytest.mark.parametrize("name", VARIANTS)
 def test_paper_controller_tracks_about_as_well_as_mfac(variant_runs, name):
     _, s = variant_runs[name]
     for w, ppc, mfac in zip(s["windows"], s["rmste"]["ppc"], s["rmste"]["mfac"]):

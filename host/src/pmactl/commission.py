@@ -184,7 +184,7 @@ class Commissioning:
         static = self._static_map()
         # --- step responses at three operating points inside the reachable range
         self.progress("step responses", 0.6)
-        steps = self._steps(static)
+        steps = self._steps(static, noise)
         self.progress("derivation", 0.95)
         t_rig = self.t_now - t_start
         return Measured(polarity_measured=polarity, noise_cm=noise, static_map=static, steps=steps,
@@ -243,7 +243,7 @@ class Commissioning:
             return False, rec.x_cm[-1]
         return True, float(np.mean(rec.x_cm[-len(rec.x_cm) // 3:]))
 
-    def _steps(self, static: StaticMap) -> list[StepFit]:
+    def _steps(self, static: StaticMap, noise_cm: float) -> list[StepFit]:
         lo, hi = static.stroke_cm()
         fits: list[StepFit] = []
         dp = STEP_FRAC * (self.p_max - self.p_min)
@@ -256,7 +256,7 @@ class Commissioning:
                 rec = self._hold(p_op + sign * dp, STEP_S, f"step{k}{'+' if sign > 0 else '-'}",
                                  stop_near_limits=True)
                 t = np.asarray(rec.t_s) - rec.t_s[0]
-                fits.append(fit_step(t, np.asarray(rec.x_cm), p_op, sign * dp))
+                fits.append(fit_step(t, np.asarray(rec.x_cm), p_op, sign * dp, noise_cm=noise_cm))
                 self._hold(p_op, 0.3 * STEP_S, "settle")
             self.progress("step responses", 0.6 + 0.35 * (k + 1) / 3)
         return fits

@@ -35,6 +35,9 @@ FC_PER_CROSSOVER = 4.0       # the velocity observer's bandwidth in units of the
 FF_PER_KP = 30.0             # the feedforward integrator's gain k_ff in units of K_p
 W2_PER_A = 5.0               # lambda2's barrier at 5 a: theta = a tan(pi r / 2) reaches it at r = 0.87
 NOISE_SIGMAS_IN_W1 = 6.0     # w1 must hold 6 standard deviations of the position noise
+# a step's first movement: x MOVE_SIGMAS noise standard deviations away from its start; counted
+# only for steps that moved MOVED_SIGMAS of them in all (a smaller one is mostly noise)
+MOVE_SIGMAS, MOVED_SIGMAS = 4.0, 10.0
 MFAC_ETA, MFAC_MU, MFAC_RHO, MFAC_LAMBDA = 0.5, 1.9, 31.7, 0.03   # the paper's MFAC gains
 
 
@@ -51,6 +54,9 @@ class StepFit:
     tau_s: float
     theta_s: float
     rms_cm: float           # fit residual
+    # the time x takes to move MOVE_SIGMAS noise standard deviations from its start: the dead
+    # time as the loop meets it (nan: not measured, or the step moved too little to tell)
+    first_move_s: float = math.nan
 
 
 @dataclass
@@ -90,9 +96,11 @@ def _interp_p(p: list[float], x: list[float], x_cm: float) -> float:
     return float(np.interp(x_cm, np.asarray(x, float)[order], np.asarray(p, float)[order]))
 
 
-def fit_step(t_s: np.ndarray, x_cm: np.ndarray, p_kpa: float, dp_kpa: float) -> StepFit:
+def fit_step(t_s: np.ndarray, x_cm: np.ndarray, p_kpa: float, dp_kpa: float,
+             noise_cm: float | None = None) -> StepFit:
     """FOPDT of one step response (t from the step, x measured; the first samples before the
-    response moves give the start value, the last 20 % the end value)."""
+    response moves give the start value, the last 20 % the end value). With the noise at rest,
+    also the time of the first movement (StepFit.first_move_s)."""
     t = np.asarray(t_s, float)
     x = np.asarray(x_cm, float)
     if len(t) < 20 or t[-1] <= 0:
@@ -108,7 +116,12 @@ def fit_step(t_s: np.ndarray, x_cm: np.ndarray, p_kpa: float, dp_kpa: float) -> 
     theta = max(1.3 * t_low - 0.29 * t_high, 0.0)
     model = np.where(t > theta, 1.0 - np.exp(-(t - theta) / tau), 0.0)
     rms = float(np.sqrt(np.mean((y - model) ** 2)) * abs(dx))
-    return StepFit(p_kpa=p_kpa, dp_kpa=dp_kpa, gain_cm_per_kpa=dx / dp_kpa, tau_s=tau, theta_s=theta, rms_cm=rms)
+    first_move = math.nan
+    if noise_cm is not None and noise_cm > 0 and abs(dx) >= MOVED_SIGMAS * noise_cm:
+        moved = np.nonzero(np.abs(x - x0) >= MOVE_SIGMAS * noise_cm)[0]
+        first_move = float(t[moved[0]]) if len(moved) else math.nan
+    return StepFit(p_kpa=p_kpa, dp_kpa=dp_kpa, gain_cm_per_kpa=dx / dp_kpa, tau_s=tau, theta_s=theta, rms_cm=rms,
+                   first_move_s=first_move)
 
 
 def _first_crossing(t: np.ndarray, y: np.ndarray, level: float) -> float:
@@ -262,7 +275,13 @@ def derive(m: Measured, task: Task) -> Derivation:
     # the median of the six steps (three operating points, up and down): one step through the
     # hysteresis' dead band shows a late, slow response that is not the loop's
     tau = float(np.median([s.tau_s for s in m.steps]))
-    theta = float(np.median([s.theta_s for s in m.steps]))
+    theta_fit = float(np.median([s.theta_s for s in m.steps]))
+    # the fit's dead time, but never less than the steps' first movement: a response whose slow
+    # tail (creep, a slow valve stage) dominates fits as a long lag with no dead time, though the
+    # loop still waits that long for any answer, and too short a dead time is what costs margin
+    moves = [s.first_move_s for s in m.steps if math.isfinite(s.first_move_s)]
+    theta_move = float(np.median(moves)) if moves else 0.0
+    theta = max(theta_fit, theta_move)
     theta_eff = theta + m.period_s             # one sample of the loop's own delay
     for k in TAU_C_PER_THETA:       # the tightest first; the last is the most robust
         shape = _shape(gain, tau, theta_eff, k)
@@ -334,7 +353,8 @@ def derive(m: Measured, task: Task) -> Derivation:
         "safety.x_min_cm": task.x_min_cm,
         "safety.x_max_cm": task.x_max_cm,
     }
-    figures = {"gain_cm_per_u": gain, "tau_s": tau, "theta_s": theta, "theta_eff_s": theta_eff, "tau_c_s": tau_c,
+    figures = {"gain_cm_per_u": gain, "tau_s": tau, "theta_s": theta, "theta_fit_s": theta_fit,
+               "theta_first_move_s": theta_move, "theta_eff_s": theta_eff, "tau_c_s": tau_c,
                "noise_cm": m.noise_cm, "stroke_min_cm": lo, "stroke_max_cm": hi, "hysteresis_kpa_at_p0": hold_hyst,
                "kc_u_per_cm": kc, "tau_i_s": tau_i, "k_p_per_s": k_p, "k_v_u_per_cm_s": k_v, "w1_min_cm": w1_min,
                "v_max_cm_s": v_max, "t_u_min_s": t_u_min}
