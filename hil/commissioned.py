@@ -20,10 +20,11 @@ import numpy as np
 from pmactl.client import PmaNode
 from pmactl.commission import Commissioning, Result
 from pmactl.commission_rules import Task
+from pmactl.rules import set_order
 
 from .offline_bus import OfflineBus
 from .reference import reference_function
-from .scenario import COMMISSIONED_NODE_WIDE, Controller, Scenario, protocol
+from .scenario import COMMISSIONED_NODE_WIDE, RULE_PARAMS, Controller, Scenario, protocol
 
 # the rig's wiring and the user's limits: what a freshly wired node knows before commissioning
 USER_LIMITS = ("act.p_min_kpa", "act.p_max_kpa", "safety.x_min_cm", "safety.x_max_cm")
@@ -41,6 +42,16 @@ def before_commissioning(sc: Scenario) -> dict[str, float | int]:
                                    for n, v in wiring.items()}
     out.update({n: sc.params[n] for n in USER_LIMITS if n in sc.params})
     return out
+
+
+def tell_wiring(node: PmaNode, sc: Scenario) -> None:
+    """Sets before_commissioning(sc) on the node, in the order the rules between parameters
+    allow from its current values (a 10-bit sensor's lower range first needs a lower
+    wire-break level, as a user setting them by hand would find)."""
+    wiring = before_commissioning(sc)
+    current = {name: node.get(name) for name in RULE_PARAMS}
+    for name in set_order(current, wiring):
+        node.set(name, wiring[name])
 
 
 def task_of(sc: Scenario, label: str | None = None) -> Task:
@@ -72,8 +83,7 @@ def commission(sc: Scenario, task: Task | None = None) -> Result:
     bus = OfflineBus(sc.rig_params(), node_id=1, seed=sc.seed)
     try:
         node = PmaNode(bus, node=1, host_heartbeat_s=0.1)
-        for name, value in before_commissioning(sc).items():
-            node.set(name, value)
+        tell_wiring(node, sc)
         bus.run_for(sc.settle_s)
         return Commissioning(node, task or task_of(sc)).run()
     finally:

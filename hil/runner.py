@@ -292,18 +292,15 @@ class Runner:
         from pmactl.commission import CommissionAborted, Commissioning
         from pmactl.commission_rules import CommissionError
 
-        from .commissioned import before_commissioning, task_of, with_derivation
+        from .commissioned import task_of, tell_wiring, with_derivation
         from .lane_bus import LaneBus
         from .summary import jsonable
         for lane in self.lanes:
             if not (lane.ctrl.commission and not lane.ctrl.derived):
                 continue
             label = lane.ctrl.label
-            wiring = before_commissioning(self.sc)
             try:
-                current = {name: lane.client.get(name) for name in RULE_PARAMS}
-                for name in set_order(current, wiring):
-                    lane.client.set(name, wiring[name])
+                tell_wiring(lane.client, self.sc)
             except (RuleError, PmaError, NoReply) as e:
                 raise RunError(f"node {lane.node} ({label}): setting its wiring before commissioning: {e}") from e
             bus = LaneBus(self, lane)

@@ -5,11 +5,11 @@
 # the generated code's freshness, the Python tests (numpy golden reference,
 # protocol and DBC consistency, the offline runs' library layer), the HIL
 # acceptance tests (the paper's experiments, on the real firmware offline), the
-# hil/with-vcan tests, the pmactl unit tests; then side by side in two vcan guests:
-# the integration tests of pma-fw-host and pmactl over vcan | the main job's quick
-# variant, the HIL checks only the CAN path has, the offline runs against lockstep
-# runs over vcan (to the last digit), the HIL benchmark; and a bounded libFuzzer
-# run of the CAN frame handler. Exits non-zero on any failure. Prints each stage's
+# hil/with-vcan tests beside a bounded libFuzzer run of the CAN frame handler; then
+# side by side in two vcan guests: the integration tests of pma-fw-host and pmactl over
+# vcan, the main job's quick variant and the offline runs against it (to the last
+# digit) | the HIL checks only the CAN path has, the tuning session, the HIL benchmark.
+# Stages that share the two CPUs well run side by side. Exits non-zero on any failure. Prints each stage's
 # duration at the end (also when a stage fails).
 #
 #   bash tools/run-tests.sh           # everything (the README's test command, CI)
@@ -74,8 +74,8 @@ stage() {
   STAGE_NAME=""
 }
 
-# side_by_side NAME_A FUNCTION_A NAME_B FUNCTION_B: two stages at once (each starts vcan
-# guests of its own: the guest has one CPU, the machine two), their output in build/ci-logs/
+# side_by_side NAME_A FUNCTION_A NAME_B FUNCTION_B: two stages at once (one per CPU; a vcan stage starts
+# guests of its own: a guest has one CPU, the machine two), their output in build/ci-logs/
 # and printed when both have ended, a progress line every minute meanwhile. Both always run
 # to their end; the run fails after them if either failed (at once unless PMA_KEEP_GOING=1).
 side_by_side() {
@@ -131,28 +131,36 @@ side_by_side() {
   fi
 }
 
-# The firmware over vcan: its CAN interface, commands, parameters, storage, faults and identity,
-# and pmactl driving it (in the first guest; docs/tuning.md's session runs in the second).
+# The two vcan lanes are balanced by their measured durations (build/ci-logs/lane*.seconds).
+# The first guest: the firmware over vcan (its CAN interface, commands, parameters, storage,
+# faults and identity, and pmactl driving it), then the README main job's quick variant and
+# the offline runs against that lockstep run over vcan, to the last digit (and a fault).
 vcan_integration() {
   hil/with-vcan .venv/bin/python -m pytest -q tests/integration host/tests/integration/test_pmactl_fw.py
+  echo "-- the README's main job, quick variant (Case 3, first 30 s, each lane commissioned, PPC vs MFAC)"
+  env OUT=build/hil/ci-quick bash tools/run-demo.sh --no-setup --quick --no-progress
+  echo "-- offline == over CAN (that quick run, and a fault)"
+  PMA_OFFLINE_COMPARE_RUN=build/hil/ci-quick hil/with-vcan .venv/bin/python -m pytest -q \
+    hil/tests/test_offline_vs_hil.py
 }
 
-# The HIL harness over vcan (in the second guest, one after the other): the README main job's
-# quick variant; what only the CAN path has (bus log, identity, clean stops, --board); the
-# offline runs against lockstep runs over vcan, to the last digit (that quick run and a fault);
-# the tuning session of docs/tuning.md; the lockstep benchmark (printed, never asserted).
+# The second guest, one after the other: what only the CAN path of the HIL has (bus log,
+# identity, clean stops, --board); the tuning session of docs/tuning.md; the lockstep
+# benchmark (printed, never asserted).
 vcan_hil() {
-  echo "-- the README's main job, quick variant (Case 3, first 30 s, PPC vs MFAC)"
-  env OUT=build/hil/ci-quick bash tools/run-demo.sh --no-setup --quick --no-progress
-  echo "-- HIL over vcan: bus log, identity, clean stops, --board; offline == over CAN"
-  PMA_OFFLINE_COMPARE_RUN=build/hil/ci-quick hil/with-vcan .venv/bin/python -m pytest -q \
-    hil/tests/test_hil_acceptance.py hil/tests/test_offline_vs_hil.py
+  echo "-- HIL over vcan: bus log, identity, clean stops, --board"
+  hil/with-vcan .venv/bin/python -m pytest -q hil/tests/test_hil_acceptance.py
   echo "-- docs/tuning.md's worked tuning session, pmactl against pma-fw-host over vcan"
   hil/with-vcan .venv/bin/python -m pytest -q host/tests/integration/test_tuning_session.py
   echo "-- HIL lockstep benchmark (printed, never asserted)"
   .venv/bin/python -m hil bench --seconds 2
 }
 
+# Stages of one process each that can share the two CPUs.
+no_can_pytest() { .venv/bin/python -m pytest -q "${NO_CAN_TESTS[@]}"; }
+pmactl_unit_tests() { .venv/bin/python -m pytest -q host/tests --ignore=host/tests/integration; }
+with_vcan_tests() { bash hil/tests/test_with_vcan.sh; }
+fuzz_60s() { bash tools/fuzz.sh 60; }
 
 NO_CAN_TESTS=(tests/golden tests/protocol hil/tests/test_rig.py hil/tests/test_rig_profiles.py
   hil/tests/test_scenarios.py hil/tests/test_offline.py hil/tests/test_metrics_names.py
@@ -175,17 +183,14 @@ stage "build every preset (tools/build-all.sh)" bash tools/build-all.sh
 for p in host cortex-m4f cortex-m3 cortex-m0; do
   stage "ctest $p" ctest --preset "$p" -j2
 done
-stage "pytest (no CAN)" .venv/bin/python -m pytest -q "${NO_CAN_TESTS[@]}"
+side_by_side "pytest (no CAN)" no_can_pytest "pmactl unit tests (python-can virtual bus, no CAN)" pmactl_unit_tests
 stage "HIL acceptance offline (the paper's Cases 1-3, MFAC, PID, load change, constraint, faults; libpma_offline.so)" \
   .venv/bin/python -m pytest -q hil/tests/test_acceptance.py
 stage "rig variants offline (Case 3 on rigs the set was not tuned on: no fault, the guarantee or its flagged loss, about MFAC's error)" \
   .venv/bin/python -m pytest -q hil/tests/test_rig_variants.py
-stage "hil/with-vcan" bash hil/tests/test_with_vcan.sh
-stage "pmactl unit tests (python-can virtual bus, no CAN)" \
-  .venv/bin/python -m pytest -q host/tests --ignore=host/tests/integration
-side_by_side "integration tests over vcan (pma-fw-host, python-can, can-utils, pmactl)" vcan_integration \
-  "HIL over vcan (main job quick, CAN-only checks, offline == over CAN, tuning session, benchmark)" vcan_hil
-stage "fuzz (libFuzzer on the CAN frame handler, ASan + UBSan, 60 s)" bash tools/fuzz.sh 60
+side_by_side "hil/with-vcan" with_vcan_tests "fuzz (libFuzzer on the CAN frame handler, ASan + UBSan, 60 s)" fuzz_60s
+side_by_side "vcan: integration tests (pma-fw-host, python-can, can-utils, pmactl), main job quick, offline == over CAN" \
+  vcan_integration "vcan: HIL CAN-only checks, tuning session, benchmark" vcan_hil
 if ((FAILED_STAGES > 0)); then
   echo "run-tests: $FAILED_STAGES stage(s) failed (PMA_KEEP_GOING=1)"
   exit 1
