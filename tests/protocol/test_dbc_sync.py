@@ -15,7 +15,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 DBC = ROOT / "firmware/protocol/pma_proto.dbc"
-STATUS_H = ROOT / "firmware/control/include/pma/status.h"
+STATUS_H = ROOT / "firmware/common/include/pma/status.h"
 SUPERVISOR_H = ROOT / "firmware/app/supervisor.h"
 APP_H = ROOT / "firmware/app/app.h"
 PARAMS_H = ROOT / "firmware/app/params.h"
