@@ -3,7 +3,7 @@
 
     .venv/bin/python hil/plot_rig_real.py [--out docs/img] [--no-plots]
 
-Prints issue 19's table for the three rig profiles (nominal, dmsp10, mas10-itv2050)
+Prints the measured muscle's table (the DMSP-10-250's figures) for the three rig profiles (nominal, dmsp10, mas10-itv2050)
 and writes docs/img/rig_real_steps.png (pressure steps, in % of the step),
 rig_real_creep.png (s after a pressure step, in % of its change) and
 rig_real_loop.png (the 400 ms staircase loops, in % of the stroke). Only the rig
@@ -37,7 +37,7 @@ from hil.rig_params import RigParams  # noqa: E402
 
 PROFILES: list[tuple[str, TablePoints]] = [("nominal", MAS10_POINTS), ("dmsp10", DMSP10_POINTS),
                                            ("mas10-itv2050", MAS10_POINTS)]
-MEASURED = {  # issue 19's table (hil/tests/test_rig_profiles.py has the source)
+MEASURED = {  # the measured DMSP-10-250's table (hil/tests/test_rig_profiles.py has the source)
     "dead_time_rise_ms": "30-40", "dead_time_fall_ms": "50-80", "rise_small_ms": "70", "rise_large_ms": "330",
     "fall_small_ms": "1,100", "fall_large_ms": "1,270", "creep_rise_pct": "13-24", "creep_fall_pct": "24-44",
     "loop_400ms_mid_pct": "19", "loop_400ms_max_pct": "21", "loop_4s_mid_pct": "about 10", "reversal_pct": "about 68",

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-"""The figures of issue 19's table, measured on a simulated rig the way they were
+"""The figures of the measured muscle's table (a DMSP-10-250), measured on a simulated rig the way they were
 measured on the real DMSP-10-250 (docs/rig.md, "Against a real muscle").
 
 Each function drives a Rig open loop with pressure commands (kPa, through the DAC)
@@ -156,7 +156,7 @@ class TablePoints:
     reversal: tuple[float, float, float]  # p_lo, p_hi, reversal size
 
 
-# The measured DMSP-10-250's table (issue 19) at the record's pressures (gauge:
+# The measured DMSP-10-250's table at the record's pressures (gauge:
 # the record's p + 30 kPa, see tools/fit_rig_dmsp10.py): 0.5 / 2.4 bar rises,
 # 0.5 / 1.2 bar falls, the 0.05 V (3 kPa) staircase at 400 ms over the holds'
 # range (0 to 7.1 V, 0-420 kPa), 4 s holds, 0.4-0.5 bar reversals.
@@ -178,7 +178,7 @@ MAS10_POINTS = TablePoints(
 
 
 def table(params: RigParams, points: TablePoints = DMSP10_POINTS, loops: bool = True) -> dict[str, Any]:
-    """Every figure of issue 19's table for one rig (noise and drift off). The creep
+    """Every figure of the measured muscle's table for one rig (noise and drift off). The creep
     figures come from the large rise and fall."""
     q = quiet(params)
     rs = step_figures(q, *points.rise_small)

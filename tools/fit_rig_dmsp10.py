@@ -26,7 +26,7 @@ set; holds 61-112 are never used by the fit and validate it. Stages:
    u [V] -> p [kPa], the spring K(P) = K0 - K1 P, the load W and the hysteresis
    amplitude, with F(P) fixed to Martens & Boblan's force map of the same muscle;
 2. the valve (coordinate search): dead times, filling and exhaust rates, the slow
-   pilot, against the measured step figures of issue 19's table (rise and fall
+   pilot, against the measured step figures of the DMSP-10-250's table (rise and fall
    times, dead times), starting from the FOPDT summary;
 3. creep: its fractions and time constants against the table's creep figures,
    starting from the creep summary;
@@ -73,7 +73,7 @@ P_OFFSET_KPA = 30.0  # the record's p reads -0.30 bar at atmospheric pressure
 FIT_LAST_HOLD = 60
 OUT = ROOT / "hil" / "profiles" / "dmsp10.json"
 
-# Issue 19's table, measured on the DMSP-10-250 (the same figures live in
+# The table measured on the DMSP-10-250 (the same figures live in
 # hil/tests/test_rig_profiles.py): the fit's targets are the ranges' middles.
 TARGETS = {
     "dead_time_rise_ms": 35.0, "dead_time_fall_ms": 65.0,

@@ -138,7 +138,7 @@ def main() -> int:
     cell = lambda v: "-" if v is None or v < 0 else f"{v:.0f}"   # < 0: below timer resolution
     say(table(["step", *presets], [[n, *(cell(bench[p].get(n)) for p in presets)] for n in names]))
     say("")
-    say("Targets (issue 2):\n")
+    say("Targets:\n")
     rows = []
     for name, preset, limit in TARGETS:
         got = bench.get(preset, {}).get(name)

@@ -4,6 +4,7 @@
 #define PMA_APP_INTERNAL_H
 
 #include "app.h"
+#include "scaling.h"
 
 pma_param_phase_t pma_app_phase(const pma_app_t *app);
 void pma_app_adc_scaling(const pma_params_t *p, pma_adc_scaling_t *s);

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Issue 16, point 10: the summary's figures say what they count. Violations of the band
+"""The summary's figures say what they count. Violations of the band
 are split into the controller's (output active) and the safe state's after a fault (a
 vented muscle under a pull sits outside the band by physics); the unreachable-reference
 count is named for the curve it uses. No CAN."""

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Issue 16, point 9: the harness meets the rules between parameters (docs/parameters.md)
+"""The harness meets the rules between parameters (docs/parameters.md)
 itself. A rig with an 11-bit ADC puts adc.raw_min_counts (3.8 mA) below the default
 wire-break level 737: the harness must set adc.wire_break_below_counts first (rule 3), and
 the scenario check must refuse a set the node would refuse. No CAN: the node's rules are
@@ -33,7 +33,7 @@ def test_11_bit_adc_is_configured_in_a_valid_order(tmp_path) -> None:
     s = load(str(scenario_file(tmp_path, "[rig.sensor]\nadc_bits = 11")))
     params = s.node_params(s.controllers[0])
     assert params["adc.raw_min_counts"] < defaults()["adc.wire_break_below_counts"]
-    # the harness's order before issue 16 (the wiring's own order) breaks rule 3 on the way
+    # the wiring's own order (what the harness once used) breaks rule 3 on the way
     now = {n: defaults()[n] for n in RULE_PARAMS}
     naive = dict(now)
     broke = []

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-"""The realistic rig profiles against the measured muscle (issue 19), no CAN needed.
+"""The realistic rig profiles against the measured muscle, no CAN needed.
 
     .venv/bin/python -m pytest hil/tests/test_rig_profiles.py -q
 
@@ -24,7 +24,7 @@ from hil.rig_profiles import PROFILES, dmsp10_fit_report
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 
-# Issue 19's table: a Festo DMSP-10-250 with a proportional pressure valve, laser
+# The measured table: a Festo DMSP-10-250 with a proportional pressure valve, laser
 # displacement and pressure sensor at 100 Hz (T. Bazina, github.com/tbazina/pam_lqi_pid,
 # experiment/excitation_experiment_100hz_15min_4s_hold.csv and the quasi-static
 # staircases experiment/static_threshold_hysteresis_step_0p05v_settle_time_400ms*.csv),
@@ -46,7 +46,7 @@ MEASURED_DMSP10 = {
     "reversal_pct": (68.0 - 25.0, 68.0 + 25.0),       # about 68 % of the large-step slope, +-25 points
 }
 
-# The idealised rig's own column of the same table (issue 19: "our rig"): the nominal
+# The idealised rig's own column of the same table ("our rig"): the nominal
 # profile must still show it (it is unchanged), and the realistic ones must not.
 NOMINAL_DEAD_TIME_MS = 10.0
 NOMINAL_RISE_MS = 70.0

@@ -151,10 +151,8 @@ def _xvfb_missing() -> str | None:
     return None
 
 
-@pytest.mark.skipif(_xvfb_missing() is not None, reason=str(_xvfb_missing()))
-def test_scope_in_a_window_under_xvfb(tmp_path: Path) -> None:
-    """The TkAgg window on a virtual X server: the plotted line is on the screen, and it
-    moves between a screenshot after frame 30 and one after frame 45; the keys work."""
+def _in_a_window(cwd: Path, *args: str) -> subprocess.CompletedProcess[str]:
+    """scope_window.py ARGS on a fresh virtual X server (TkAgg); it must exit 0."""
     xvfb = subprocess.Popen(["Xvfb", "-displayfd", "1", "-screen", "0", "1024x768x24", "-nolisten", "tcp"],
                             stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
     try:
@@ -162,12 +160,20 @@ def test_scope_in_a_window_under_xvfb(tmp_path: Path) -> None:
         display = f":{xvfb.stdout.readline().strip()}"
         env = dict(os.environ, DISPLAY=display, MPLBACKEND="TkAgg",
                    PYTHONPATH=os.pathsep.join([str(HERE)] + sys.path))
-        r = subprocess.run([sys.executable, str(HERE / "scope_window.py"), str(tmp_path), "30", "15"],
-                           env=env, capture_output=True, text=True, timeout=300, check=False, cwd=tmp_path)
+        r = subprocess.run([sys.executable, str(HERE / "scope_window.py"), *args],
+                           env=env, capture_output=True, text=True, timeout=300, check=False, cwd=cwd)
         assert r.returncode == EXIT_OK, r.stdout + r.stderr
+        return r
     finally:
         xvfb.terminate()
         xvfb.wait(10)
+
+
+@pytest.mark.skipif(_xvfb_missing() is not None, reason=str(_xvfb_missing()))
+def test_scope_in_a_window_under_xvfb(tmp_path: Path) -> None:
+    """The TkAgg window on a virtual X server: the plotted line is on the screen, and it
+    moves between a screenshot after frame 30 and one after frame 45; the keys work."""
+    r = _in_a_window(tmp_path, str(tmp_path), "30", "15")
     stats = json.loads((tmp_path / "stats.json").read_text())
     assert stats["frames"] == 47
     assert stats["paused_after_space"] is True and stats["paused_after_second_space"] is False
@@ -186,20 +192,7 @@ def test_scope_rate_in_a_window_under_xvfb(tmp_path: Path, nodes: int) -> None:
     """A benchmark, printed (-s), never asserted on: the rate the scope reaches in a TkAgg
     window drawing NODES running fake nodes for 5 s (the figure docs quote). The test asserts
     only that it drew and saw every node's telemetry."""
-    xvfb = subprocess.Popen(["Xvfb", "-displayfd", "1", "-screen", "0", "1024x768x24", "-nolisten", "tcp"],
-                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
-    try:
-        assert xvfb.stdout is not None
-        display = f":{xvfb.stdout.readline().strip()}"
-        env = dict(os.environ, DISPLAY=display, MPLBACKEND="TkAgg",
-                   PYTHONPATH=os.pathsep.join([str(HERE)] + sys.path))
-        r = subprocess.run([sys.executable, str(HERE / "scope_window.py"), "rate", str(tmp_path), "5",
-                            str(nodes)], env=env, capture_output=True, text=True, timeout=300, check=False,
-                           cwd=tmp_path)
-        assert r.returncode == EXIT_OK, r.stdout + r.stderr
-    finally:
-        xvfb.terminate()
-        xvfb.wait(10)
+    r = _in_a_window(tmp_path, "rate", str(tmp_path), "5", str(nodes))
     stats = json.loads((tmp_path / "stats.json").read_text())
     assert stats["frames"] > 1
     assert all(f"node {n}" in r.stdout for n in range(1, nodes + 1)), r.stdout

@@ -25,7 +25,7 @@
 #include "generated/pma_proto.h"
 #include "params.h"
 #include "pma/hal.h"
-#include "pma/hal_scaling.h"
+#include "scaling.h"
 #include "pma/status.h"
 #include "pma_hal_fake.h"
 #include "pma_test.h"

@@ -59,6 +59,7 @@
 #include "app.h"
 #include "generated/pma_proto.h"
 #include "generated/pma_proto_senders.h"
+#include "scaling.h"
 #include "params.h"
 #include "pma/hal.h"
 #include "pma_hal_fake.h"
@@ -226,7 +227,7 @@ static float oracle_active_kpa(const pma_params_t *p, float u, float prev, float
     return t;
 }
 
-/* DAC counts (pma/hal_scaling.h): clamp(round(counts_at_zero + counts_per_kpa p),
+/* DAC counts (firmware/app/scaling.h): clamp(round(counts_at_zero + counts_per_kpa p),
  * min, max); false when the scaling is invalid (counts_per_kpa 0, min > max). */
 static bool oracle_counts(const pma_params_t *p, float kpa, uint16_t *counts)
 {
@@ -256,7 +257,7 @@ static bool scalings_valid(const pma_params_t *p)
 }
 
 /* The rules between parameters that ARM checks (docs/parameters.md, actuator.h,
- * hal_scaling.h), except ctrl.u_min < u_max, which is a "stopped" pair that
+ * scaling.h), except ctrl.u_min < u_max, which is a "stopped" pair that
  * may be changed while ARMED (START checks it again). */
 static bool config_armable(const pma_params_t *p)
 {

@@ -61,19 +61,14 @@ static void test_adc_faults(void)
     assert_status(pma_hal_adc_read(&raw), PMA_OK);
     TEST_ASSERT_EQUAL_INT(2500, raw);
 
-    /* out of range and wire break, seen through the scaling */
-    const pma_adc_scaling_t s = {.offset_cm = -2.5f, .gain_cm_per_count = 10.0f / 3276.0f,
-                                 .raw_min_counts = 778, .raw_max_counts = 4094,
-                                 .wire_break_below_counts = 737};
-    float x;
+    /* out of range and wire break: the counts the application's scaling refuses
+     * (its checks: tests/app/test_app_scaling.c) */
     pma_fake_adc_out_of_range(4095);
     assert_status(pma_hal_adc_read(&raw), PMA_OK);
     TEST_ASSERT_EQUAL_INT(4095, raw);
-    assert_status(pma_adc_counts_to_cm(&s, raw, &x), PMA_ERR_RANGE);
     pma_fake_adc_wire_break();
     assert_status(pma_hal_adc_read(&raw), PMA_OK);
     TEST_ASSERT_EQUAL_INT(PMA_FAKE_ADC_WIRE_BREAK_COUNTS, raw);
-    assert_status(pma_adc_counts_to_cm(&s, raw, &x), PMA_ERR_WIRE_BREAK);
     /* a sensor that broke stays broken: stuck keeps reading the wire-break level */
     pma_fake_adc_stuck();
     pma_fake_adc_set(3000);

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Issue 16: what a client written from the docs alone relies on, checked on the
+"""What a client written from the docs alone relies on, checked on the
 wire (raw frames, so that no client library hides a difference).
 
 PARAM_RESP's Type (docs/protocol.md, signal table of PARAM_RESP): SAVE, LOAD and

@@ -73,7 +73,7 @@ def default_of(name: str) -> float | int:
 
 # ----------------------------------------------------------- sensor scaling --
 # x = adc.offset_cm + adc.gain_cm_per_count * counts, in single precision
-# (hal/src/adc_scaling.c), with the defaults of params.toml.
+# (firmware/app/adc_scaling.c), with the defaults of params.toml.
 
 def counts_to_cm(counts: int, offset: float | None = None, gain: float | None = None) -> float:
     off = f32(default_of("adc.offset_cm") if offset is None else offset)

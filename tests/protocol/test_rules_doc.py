@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-"""The rules between parameters (issue 16, point 3): params.toml's [[rule]] tables, which
+"""The rules between parameters: params.toml's [[rule]] tables, which
 docs/parameters.md lists, are the PMA_RULE_* numbers of firmware/app/app.h that GET_STATUS
 LAST_RULE reports, and the set-time rules are exactly those pma_app_param_rule checks
 before its `set_only` return."""

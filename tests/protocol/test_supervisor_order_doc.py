@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: Apache-2.0
 """docs/firmware.md and docs/protocol.md give the supervisor's check order, which decides
 which fault is latched when several hold; both must be the order of
-firmware/app/supervisor.c (issue 16, point 5)."""
+firmware/app/supervisor.c."""
 from __future__ import annotations
 
 import re

@@ -2,7 +2,8 @@
 /* The port interface: the one header every HAL port implements (in the manner
  * of CANopenNode's CO_driver.h). Exactly one port is linked into a program,
  * chosen at link time (CMake: link `pma_hal` plus one of `pma_hal_fake`,
- * `pma_hal_template`, later `pma_hal_linux`, `pma_hal_stm32g474`); there are
+ * `pma_hal_template`, `pma_hal_linux` (the host), `pma_hal_stm32g474` (the
+ * board)); there are
  * no function pointers and no run-time registration.
  *
  * Rules every port follows (docs/hal.md):
@@ -25,7 +26,6 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "pma/hal_scaling.h"
 #include "pma/status.h"
 
 /* ---------------------------------------------------------------- port -- */
@@ -52,16 +52,17 @@ const char *pma_hal_port_name(void);
 
 /* ----------------------------------------------------------------- ADC -- */
 
-/* Latest raw sample of the position sensor (a laser displacement sensor),
- * unscaled: convert with pma_adc_counts_to_cm() (pma/hal_scaling.h), which
- * also does the range and wire-break checks. Returns PMA_ERR_IO when the
- * converter fails. */
+/* Latest raw sample of the position sensor (a laser displacement sensor), in
+ * counts: the application scales it and checks its range and wire break
+ * (pma_adc_counts_to_cm(), firmware/app/scaling.h). Returns PMA_ERR_IO when
+ * the converter fails. */
 int pma_hal_adc_read(uint16_t *raw_counts);
 
 /* ----------------------------------------------------------------- DAC -- */
 
 /* Sets the pressure command output (to the electro-pneumatic regulator) to
- * `counts`; get counts from pma_dac_kpa_to_counts(). Counts beyond the port's
+ * `counts` (the application's pma_dac_kpa_to_counts() gives them from kPa,
+ * firmware/app/scaling.h). Counts beyond the port's
  * converter (documented by the port) return PMA_ERR_RANGE and change nothing. */
 int pma_hal_dac_write(uint16_t counts);
 

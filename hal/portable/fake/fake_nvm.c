@@ -5,6 +5,8 @@
  * program unit left half-written reads as corrupt until erased. */
 #include "fake_internal.h"
 
+#include "pma/hal_nvm_check.h"
+
 #include <string.h>
 
 static struct {
@@ -127,13 +129,6 @@ static int usable(void)
     return PMA_OK;
 }
 
-static int in_block(uint32_t block, uint32_t offset, uint32_t len)
-{
-    if (block >= nvm.g.block_count) return PMA_ERR_RANGE;
-    if (offset > nvm.g.block_size || len > nvm.g.block_size - offset) return PMA_ERR_RANGE;
-    return PMA_OK;
-}
-
 static uint8_t *at(uint32_t block, uint32_t offset)
 {
     return nvm.mem + (size_t)block * nvm.g.block_size + offset;
@@ -166,7 +161,7 @@ int pma_hal_nvm_read(uint32_t block, uint32_t offset, void *buf, uint32_t len)
 {
     if (buf == NULL) return PMA_ERR_NULL;
     int rc = usable();
-    if (rc == PMA_OK) rc = in_block(block, offset, len);
+    if (rc == PMA_OK) rc = pma_nvm_check_range(&nvm.g, block, offset, len);
     if (rc != PMA_OK) return rc;
     if (torn_in(block, offset, len)) {
         nvm.corrupt_reads++;
@@ -180,9 +175,8 @@ int pma_hal_nvm_program(uint32_t block, uint32_t offset, const void *data, uint3
 {
     if (data == NULL) return PMA_ERR_NULL;
     int rc = usable();
-    if (rc == PMA_OK) rc = in_block(block, offset, len);
+    if (rc == PMA_OK) rc = pma_nvm_check_program(&nvm.g, block, offset, len);
     if (rc != PMA_OK) return rc;
-    if (offset % nvm.g.program_size != 0 || len % nvm.g.program_size != 0) return PMA_ERR_RANGE;
     uint8_t *dst = at(block, offset);
     for (uint32_t i = 0; i < len; ++i) {
         if (dst[i] != 0xFFu) return PMA_ERR_NOT_ERASED;
@@ -202,7 +196,7 @@ int pma_hal_nvm_program(uint32_t block, uint32_t offset, const void *data, uint3
 int pma_hal_nvm_erase(uint32_t block)
 {
     int rc = usable();
-    if (rc == PMA_OK) rc = in_block(block, 0, 0);
+    if (rc == PMA_OK) rc = pma_nvm_check_range(&nvm.g, block, 0, 0);
     if (rc != PMA_OK) return rc;
     const uint32_t applied = operation(nvm.g.block_size);
     memset(at(block, 0), 0xFF, applied);

@@ -10,6 +10,8 @@
 
 #include "linux_internal.h"
 
+#include "pma/hal_nvm_check.h"
+
 #include <errno.h>
 #include <fcntl.h>
 #include <limits.h>
@@ -191,13 +193,6 @@ static int usable(void)
     return PMA_OK;
 }
 
-static int in_block(uint32_t block, uint32_t offset, uint32_t len)
-{
-    if (block >= nvm.g.block_count) return PMA_ERR_RANGE;
-    if (offset > nvm.g.block_size || len > nvm.g.block_size - offset) return PMA_ERR_RANGE;
-    return PMA_OK;
-}
-
 static off_t at(uint32_t block, uint32_t offset)
 {
     return (off_t)block * nvm.g.block_size + offset;
@@ -236,7 +231,7 @@ int pma_hal_nvm_read(uint32_t block, uint32_t offset, void *buf, uint32_t len)
 {
     if (buf == NULL) return PMA_ERR_NULL;
     int rc = usable();
-    if (rc == PMA_OK) rc = in_block(block, offset, len);
+    if (rc == PMA_OK) rc = pma_nvm_check_range(&nvm.g, block, offset, len);
     if (rc != PMA_OK) return rc;
     if (read_all(nvm.fd, buf, len, at(block, offset)) != 0) return io_fail("read");
     return PMA_OK;
@@ -246,9 +241,8 @@ int pma_hal_nvm_program(uint32_t block, uint32_t offset, const void *data, uint3
 {
     if (data == NULL) return PMA_ERR_NULL;
     int rc = usable();
-    if (rc == PMA_OK) rc = in_block(block, offset, len);
+    if (rc == PMA_OK) rc = pma_nvm_check_program(&nvm.g, block, offset, len);
     if (rc != PMA_OK) return rc;
-    if (offset % nvm.g.program_size != 0 || len % nvm.g.program_size != 0) return PMA_ERR_RANGE;
     for (uint32_t done = 0; done < len;) {
         const uint32_t n = len - done < CHUNK_BYTES ? len - done : CHUNK_BYTES;
         if (read_all(nvm.fd, chunk, n, at(block, offset + done)) != 0) return io_fail("read");
@@ -270,7 +264,7 @@ int pma_hal_nvm_program(uint32_t block, uint32_t offset, const void *data, uint3
 int pma_hal_nvm_erase(uint32_t block)
 {
     int rc = usable();
-    if (rc == PMA_OK) rc = in_block(block, 0, 0);
+    if (rc == PMA_OK) rc = pma_nvm_check_range(&nvm.g, block, 0, 0);
     if (rc != PMA_OK) return rc;
     bool cut;
     const uint32_t applied = operation(nvm.g.block_size, &cut);

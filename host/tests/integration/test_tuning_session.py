@@ -131,7 +131,7 @@ def test_tuning_session(firmware, plant, tmp_path: Path) -> None:
                   tmp_path / "rig.json"]:
             shutil.copy(f, target.parent / f.name)
 
-    # docs/tuning.md quotes this session: its console blocks are this transcript (issue 16)
+    # docs/tuning.md quotes this session: its console blocks are this transcript
     stale = transcript.stale_blocks(transcript.DOC.read_text(), run.text())
     assert not stale, (f"docs/tuning.md differs from the session at the blocks starting {stale}: "
                        "rewrite them with host/tests/integration/transcript.py (see its docstring)")

@@ -14,7 +14,7 @@ typedef enum pma_status {
     PMA_ERR_NOT_READY = -5,    /* instance not (successfully) initialised */
     PMA_ERR_UNSUPPORTED = -6,  /* valid value of a feature this variant does not provide */
     PMA_ERR_FIXED_RANGE = -7,  /* value not representable in the fixed-point format used */
-    /* HAL (hal/include/pma/hal.h) and parameter storage (firmware/app/pstore.h) */
+    /* HAL (hal/include/pma/hal.h) and parameter storage (firmware/storage/pstore.h) */
     PMA_ERR_NOT_IMPLEMENTED = -8, /* the HAL port does not implement this function (template) */
     PMA_ERR_EMPTY = -9,        /* nothing to receive / read: queue or log empty */
     PMA_ERR_FULL = -10,        /* queue full (e.g. CAN TX): nothing was queued */

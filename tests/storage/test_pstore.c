@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Parameter storage (firmware/app/pstore.h) on the fake NVM: the A/B
+/* Parameter storage (firmware/storage/pstore.h) on the fake NVM: the A/B
  * rotation, the record layout, corruption of every part of a record,
  * sequence wrap-around, oversized blobs, read-back verification, device
  * failures. The power-cut sweep is in test_pstore_powercut.c. */

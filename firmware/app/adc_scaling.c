@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* Position sensor scaling: counts <-> cm with range and wire-break checks
- * (see pma/hal_scaling.h). */
-#include "pma/hal_scaling.h"
+ * (see scaling.h). */
+#include "scaling.h"
 #include "pma/status.h"
 
 #include <math.h>

@@ -1,11 +1,12 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* ADC and DAC scaling (pma/hal_scaling.h): conversion, range and wire-break
+/* ADC and DAC scaling (firmware/app/scaling.h): conversion, range and wire-break
  * checks, saturation, validation. */
-#include "hal_test.h"
-
 #include <math.h>
+#include <stdint.h>
 
-#include "pma/hal_scaling.h"
+#include "pma/status.h"
+#include "pma_test.h"
+#include "scaling.h"
 
 /* The header's example: 4-20 mA over 165 ohm into a 12-bit 3.3 V ADC, 0-10 cm. */
 static const pma_adc_scaling_t laser = {

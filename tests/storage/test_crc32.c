@@ -1,7 +1,8 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* CRC-32 (firmware/app/crc32.h): the standard check value, chaining, and
+/* CRC-32 (firmware/storage/crc32.h): the standard check value, chaining, and
  * agreement with a plain bit-at-a-time implementation written here. */
-#include "hal_test.h"
+#include "pma/status.h"
+#include "pma_test.h"
 
 #include <string.h>
 

@@ -7,7 +7,8 @@
 #ifndef PMA_PSTORE_TEST_H
 #define PMA_PSTORE_TEST_H
 
-#include "hal_test.h"
+#include "pma/status.h"
+#include "pma_test.h"
 
 #include <stdbool.h>
 #include <string.h>

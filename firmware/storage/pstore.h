@@ -21,7 +21,7 @@
  * sequence + 1: it erases the blocks the new record covers, programs the
  * record front to back in chunks, and reads it back. The newest record is
  * never touched, so after a power cut anywhere in a save a load finds either
- * it or the complete new one (tests/hal/test_pstore_powercut.c).
+ * it or the complete new one (tests/storage/test_pstore_powercut.c).
  * Load takes the valid record with the newer sequence number (serial-number
  * arithmetic, RFC 1982: so the counter may wrap) and falls back to the other
  * slot when that one is invalid.

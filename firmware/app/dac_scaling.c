@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Pressure command scaling: kPa -> counts, saturating (see pma/hal_scaling.h). */
-#include "pma/hal_scaling.h"
+/* Pressure command scaling: kPa -> counts, saturating (see scaling.h). */
+#include "scaling.h"
 #include "pma/status.h"
 
 #include <math.h>

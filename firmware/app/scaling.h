@@ -1,7 +1,8 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* Scaling between converter counts and physical units: pure functions, the
- * same for every port (they live in `pma_hal`, not in a port). The scaling
- * values come from the sensor's and regulator's data sheets and the board's
+ * same for every port. They are the application's policy (the HAL deals in
+ * counts only: pma_hal_adc_read(), pma_hal_dac_write()). The scaling values
+ * come from the sensor's and regulator's data sheets and the board's
  * analogue front end; they are parameters of the application.
  *
  * Position sensor (ADC): a laser displacement sensor with a 4-20 mA or 0-10 V
@@ -29,8 +30,8 @@
  * (actuator limits), this clamp is the last line of defence. Example:
  * 0-600 kPa regulator on a 12-bit DAC scaled to 0-10 V: counts_at_zero_kpa = 0,
  * counts_per_kpa = 4095/600, min_counts = 0, max_counts = 4095. */
-#ifndef PMA_HAL_SCALING_H
-#define PMA_HAL_SCALING_H
+#ifndef PMA_SCALING_H
+#define PMA_SCALING_H
 
 #include <stdint.h>
 
@@ -71,4 +72,4 @@ int pma_dac_validate_scaling(const pma_dac_scaling_t *s);
  * *counts then unchanged. */
 int pma_dac_kpa_to_counts(const pma_dac_scaling_t *s, float p_kpa, uint16_t *counts);
 
-#endif /* PMA_HAL_SCALING_H */
+#endif /* PMA_SCALING_H */
