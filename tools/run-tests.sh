@@ -162,7 +162,7 @@ pmactl_unit_tests() { .venv/bin/python -m pytest -q host/tests --ignore=host/tes
 with_vcan_tests() { bash hil/tests/test_with_vcan.sh; }
 fuzz_60s() { bash tools/fuzz.sh 60; }
 
-NO_CAN_TESTS=(tests/golden tests/protocol hil/tests/test_rig.py hil/tests/test_rig_profiles.py
+NO_CAN_TESTS=(tests/golden tests/protocol tests/tools hil/tests/test_rig.py hil/tests/test_rig_profiles.py
   hil/tests/test_scenarios.py hil/tests/test_offline.py hil/tests/test_metrics_names.py
   hil/tests/test_param_rules.py hil/tests/test_summary_flags.py hil/tests/test_commission.py)
 

@@ -84,6 +84,13 @@ typedef enum pma_param_op {
 #define PMA_HB_GUARANTEE_LOST  0x0200u /* PPC: the guarantee was lost since START (controller.h) */
 #define PMA_HB_FALLBACK        0x0400u /* PPC: MFAC is in charge (ppc.fallback 1) */
 
+/* telem.mask bits: which telemetry frames a telemetry tick sends. */
+#define PMA_TELEM_MASK_A 0x01u /* TELEM_A: run time, x */
+#define PMA_TELEM_MASK_B 0x02u /* TELEM_B: x_r, e */
+#define PMA_TELEM_MASK_C 0x04u /* TELEM_C: u, x' */
+#define PMA_TELEM_MASK_D 0x08u /* TELEM_D: the controller's internals */
+#define PMA_TELEM_MASK_E 0x10u /* TELEM_E: pressure, control flags, clamps */
+
 /* PLANT_ACTUATOR Sample signal. */
 #define PMA_SAMPLE_NEW      0u
 #define PMA_SAMPLE_REPEATED 1u

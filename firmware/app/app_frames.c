@@ -118,7 +118,7 @@ void pma_app_send_telemetry(pma_app_t *app)
     const pma_ctrl_out_t *o = &app->ctrl.out;
     const uint32_t mask = app->params.telem_mask;
     uint8_t d[8];
-    if (mask & 0x01u) {
+    if (mask & PMA_TELEM_MASK_A) {
         /* the control time of this step: run_ticks was counted up after it */
         const uint64_t steps = app->run_ticks > 0 ? app->run_ticks - 1u : 0u;
         const uint64_t ms = (steps * app->period_us) / 1000u;
@@ -126,22 +126,22 @@ void pma_app_send_telemetry(pma_app_t *app)
         (void)pma_proto_telem_a_pack(d, &m, sizeof d);
         (void)send(app, PMA_PROTO_TELEM_A_FRAME_ID, PMA_PROTO_TELEM_A_LENGTH, d);
     }
-    if (mask & 0x02u) {
+    if (mask & PMA_TELEM_MASK_B) {
         struct pma_proto_telem_b_t m = {.xr_cm = o->xr_cm, .e_cm = o->e_cm};
         (void)pma_proto_telem_b_pack(d, &m, sizeof d);
         (void)send(app, PMA_PROTO_TELEM_B_FRAME_ID, PMA_PROTO_TELEM_B_LENGTH, d);
     }
-    if (mask & 0x04u) {
+    if (mask & PMA_TELEM_MASK_C) {
         struct pma_proto_telem_c_t m = {.u = app->u, .v_cm_s = o->v_cm_s};
         (void)pma_proto_telem_c_pack(d, &m, sizeof d);
         (void)send(app, PMA_PROTO_TELEM_C_FRAME_ID, PMA_PROTO_TELEM_C_LENGTH, d);
     }
-    if (mask & 0x08u) {
+    if (mask & PMA_TELEM_MASK_D) {
         struct pma_proto_telem_d_t m = {.internal1 = o->internal1, .internal2 = o->internal2};
         (void)pma_proto_telem_d_pack(d, &m, sizeof d);
         (void)send(app, PMA_PROTO_TELEM_D_FRAME_ID, PMA_PROTO_TELEM_D_LENGTH, d);
     }
-    if (mask & 0x10u) {
+    if (mask & PMA_TELEM_MASK_E) {
         struct pma_proto_telem_e_t m = {
             .pressure_kpa = app->p_kpa, .ctrl_flags = (uint16_t)o->flags,
             .breaches = (uint16_t)(app->ctrl.breaches & 0xFFFFu), /* mod 2^16 (DBC) */

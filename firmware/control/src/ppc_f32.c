@@ -3,12 +3,12 @@
 #include "pma/ppc.h"
 #include "pma/status.h"
 #include "pma/trig.h"
+#include "pi.h"
 
 #include <stddef.h>
 
 #include <math.h>
 
-#define HALF_PI_F 1.57079632679490f
 
 int pma_ppc_init_f32(pma_ppc_f32_t *s, const pma_ppc_config_t *cfg)
 {
@@ -51,7 +51,7 @@ static float transform(const pma_ppc_f32_t *s, float r, float *sec2, uint32_t *f
     if (ar > s->cfg.soft_barrier_r) {
         *flags |= soft_flag;
         *sec2 = s->soft_sec2;
-        t = s->soft_tan + HALF_PI_F * s->soft_sec2 * (ar - s->cfg.soft_barrier_r);
+        t = s->soft_tan + PMA_HALF_PI_F * s->soft_sec2 * (ar - s->cfg.soft_barrier_r);
     } else {
         t = pma_tan_halfpi_f32(ar);
         *sec2 = 1.0f + t * t;

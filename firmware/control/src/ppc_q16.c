@@ -8,9 +8,9 @@
 
 #include <stddef.h>
 #include "check.h"
+#include "pi.h"
 #include "fixed_internal.h"
 
-#define HALF_PI_Q30 ((pma_q30_t)1686629713)   /* pi/2 in Q2.30 */
 #define Q24_MIN_W (1.0f / 64.0f)
 
 int pma_ppc_init_q16(pma_ppc_q16_t *s, const pma_ppc_config_t *cfg)
@@ -98,7 +98,7 @@ static pma_q16_t transform(const pma_ppc_q16_t *s, pma_q30_t r, pma_q16_t *sec2,
     if (ar > s->soft_r) {
         *flags |= soft_flag;
         *sec2 = s->soft_sec2;
-        const pma_q16_t slope = pma_q16_smul_q30(s->soft_sec2, HALF_PI_Q30);
+        const pma_q16_t slope = pma_q16_smul_q30(s->soft_sec2, PMA_HALF_PI_Q30);
         t = pma_q16_sadd(s->soft_tan, pma_q16_smul_q30(slope, ar - s->soft_r));
     } else {
         t = pma_q16_tan_halfpi(ar);

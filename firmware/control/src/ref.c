@@ -7,10 +7,10 @@
 
 #include <stddef.h>
 #include "check.h"
+#include "pi.h"
 
 #include <math.h>
 
-#define TWO_PI_F 6.28318530717959f
 
 int pma_ref_validate_config(const pma_ref_config_t *cfg)
 {
@@ -142,7 +142,7 @@ void pma_ref_reset_f32(pma_ref_f32_t *s)
 /* sin and cos of 2 pi (turns) + phase, reducing turns to its fraction first. */
 static void sincos_turns(float turns, float phase_rad, float *sn, float *cs)
 {
-    const float ph = TWO_PI_F * (turns - floorf(turns)) + phase_rad;
+    const float ph = PMA_TWO_PI_F * (turns - floorf(turns)) + phase_rad;
     *sn = sinf(ph);
     *cs = cosf(ph);
 }
@@ -175,17 +175,17 @@ int pma_ref_value_f32(const pma_ref_config_t *c, float t_s, float *xr_cm, float 
     case PMA_REF_SINE:
         sincos_turns(c->freq_hz * t_s, c->phase_rad, &sn, &cs);
         x += c->amplitude_cm * sn;
-        d = c->amplitude_cm * TWO_PI_F * c->freq_hz * cs;
+        d = c->amplitude_cm * PMA_TWO_PI_F * c->freq_hz * cs;
         break;
     case PMA_REF_CASE1:   /* -0.5 sin(t) - 2 */
-        sincos_turns(t_s / TWO_PI_F, 0.0f, &sn, &cs);
+        sincos_turns(t_s / PMA_TWO_PI_F, 0.0f, &sn, &cs);
         x = -0.5f * sn - 2.0f;
         d = -0.5f * cs;
         break;
     case PMA_REF_CASE3: { /* t sin(2 pi t (1 + t/55)/55 - pi/2)/360 - 2 */
         const float a = t_s / 55.0f;
-        sincos_turns(a * (1.0f + a), -0.25f * TWO_PI_F, &sn, &cs);
-        const float dphi = TWO_PI_F * (1.0f + 2.0f * a) / 55.0f;
+        sincos_turns(a * (1.0f + a), -0.25f * PMA_TWO_PI_F, &sn, &cs);
+        const float dphi = PMA_TWO_PI_F * (1.0f + 2.0f * a) / 55.0f;
         x = t_s * sn / 360.0f - 2.0f;
         d = sn / 360.0f + t_s * cs * dphi / 360.0f;
         break;

@@ -8,6 +8,7 @@
 
 #include <stddef.h>
 #include "check.h"
+#include "pi.h"
 #include "fixed_internal.h"
 
 #include <math.h>
@@ -16,7 +17,6 @@
 #define INV_55_Q32 ((uint64_t)78090314u)      /* 2^32 / 55 */
 #define INV_360_Q32 ((uint64_t)11930465u)     /* 2^32 / 360 */
 #define INV_360_Q30 ((int64_t)2982616)        /* 2^30 / 360 */
-#define TWO_PI_55_Q16 ((int64_t)7487)         /* 2 pi / 55 in Q16.16 */
 #define QUARTER_TURN 0x40000000u
 #define Q24_ONE ((uint64_t)1 << 24)
 
@@ -26,7 +26,7 @@ int pma_ref_init_q16(pma_ref_q16_t *s, const pma_ref_config_t *cfg)
     s->ready = 0;
     PMA_CHECK(pma_ref_validate_config(cfg));
     const float vals[] = {cfg->offset_cm, cfg->amplitude_cm, cfg->t0_s, cfg->rate_cm_s,
-                          6.2831853f * cfg->freq_hz};
+                          PMA_TWO_PI_F * cfg->freq_hz};
     for (unsigned i = 0; i < sizeof vals / sizeof vals[0]; ++i) {
         PMA_CHECK(pma_check_q16_range(vals[i]));
     }
@@ -37,9 +37,9 @@ int pma_ref_init_q16(pma_ref_q16_t *s, const pma_ref_config_t *cfg)
     s->t0 = pma_to_q(cfg->t0_s, 16);
     s->rate = pma_to_q(cfg->rate_cm_s, 16);
     s->freq_q24 = pma_to_q(cfg->freq_hz, 24);
-    s->omega = pma_to_q(6.2831853f * cfg->freq_hz, 16);
+    s->omega = pma_to_q(PMA_TWO_PI_F * cfg->freq_hz, 16);
     /* phase as a fraction of a turn, reduced to [0, 1) */
-    const float turns = cfg->phase_rad / 6.2831853f;
+    const float turns = cfg->phase_rad / PMA_TWO_PI_F;
     const float frac = turns - floorf(turns);
     s->phase_frac32 = (uint32_t)pma_to_q(frac, 30) << 2;   /* frac 2^32; 1.0 wraps to 0 */
     pma_ref_reset_q16(s);
@@ -113,7 +113,7 @@ int pma_ref_eval_q16(pma_ref_q16_t *s, pma_q16_t t_s, pma_q16_t *xr_cm, pma_q16_
         x = pma_q16_ssub(pma_q16_smul_q30(amp, sn), 2 * PMA_Q16_ONE);
         /* phi' = 2 pi (1 + 2 t/55) / 55 [rad/s], Q16.16 */
         const pma_q16_t dphi = pma_q16_sat64(
-            TWO_PI_55_Q16 + pma_rshift_round(TWO_PI_55_Q16 * 2 * (int64_t)a_q24, 24));
+            PMA_TWO_PI_55_Q16 + pma_rshift_round(PMA_TWO_PI_55_Q16 * 2 * (int64_t)a_q24, 24));
         const pma_q16_t d1 = pma_q16_sat64(pma_rshift_round((int64_t)sn * INV_360_Q30, 44));
         d = pma_q16_sadd(d1, pma_q16_smul(pma_q16_smul_q30(amp, cs), dphi));
         break;

@@ -6,10 +6,10 @@
 
 #include <stddef.h>
 #include "check.h"
+#include "pi.h"
 
 #include <math.h>
 
-#define TWO_PI_F 6.28318530717959f
 
 void pma_velest_default_config(pma_velest_config_t *cfg)
 {
@@ -37,7 +37,7 @@ float pma_velest_noise_gain(const pma_velest_config_t *cfg)
 {
     if (pma_velest_validate_config(cfg) != PMA_OK) return NAN;
     const double T = cfg->period_s;
-    const double p = exp(-2.0 * 3.14159265358979 * cfg->fc_hz * T);
+    const double p = exp(-2.0 * PMA_PI * cfg->fc_hz * T);
     if (cfg->kind == PMA_VELEST_FILTERED_DIFF) {
         return (float)((1.0 - p) / T * sqrt(2.0 / (1.0 + p)));
     }
@@ -60,7 +60,7 @@ float pma_velest_noise_gain(const pma_velest_config_t *cfg)
 
 static void coefficients(const pma_velest_config_t *cfg, float *c1, float *c2)
 {
-    const float p = expf(-TWO_PI_F * cfg->fc_hz * cfg->period_s);
+    const float p = expf(-PMA_TWO_PI_F * cfg->fc_hz * cfg->period_s);
     if (cfg->kind == PMA_VELEST_FILTERED_DIFF) {
         *c1 = p;
         *c2 = (1.0f - p) / cfg->period_s;
