@@ -14,32 +14,16 @@ from typing import Any
 
 import numpy as np
 
+from pmactl.figures import (
+    max_abs_from,
+    rmste,
+    samples_outside_from,
+    time_to_band,
+    total_variation_per_s,
+)
 
-def rmste(t_s: np.ndarray, e_cm: np.ndarray, windows: list[tuple[float, float]]) -> list[float]:
-    """Root-mean-square tracking error [cm] over each window t0 <= t < t1."""
-    out = []
-    for t0, t1 in windows:
-        sel = (t_s >= t0) & (t_s < t1)
-        out.append(float(np.sqrt(np.mean(e_cm[sel] ** 2))) if sel.any() else math.nan)
-    return out
-
-
-def total_variation_per_s(t_s: np.ndarray, y: np.ndarray) -> float:
-    """sum |y[k+1] - y[k]| / duration: how much a signal moves per second (chattering)."""
-    if len(y) < 2:
-        return 0.0
-    return float(np.sum(np.abs(np.diff(y))) / max(t_s[-1] - t_s[0], 1e-12))
-
-
-def time_to_band(t_s: np.ndarray, e_cm: np.ndarray, w1_cm: float) -> float | None:
-    """The first time after which |e| < w1 for every later sample (None: never)."""
-    outside = np.flatnonzero(np.abs(e_cm) >= w1_cm)
-    if len(outside) == 0:
-        return float(t_s[0]) if len(t_s) else None
-    last = outside[-1]
-    if last + 1 >= len(t_s):
-        return None
-    return float(t_s[last + 1])
+# the figures themselves, once for the harness and pmactl (their rules: pmactl/figures.py)
+__all__ = ["LaneMetrics", "lane_metrics", "rmste", "time_to_band", "total_variation_per_s"]
 
 
 @dataclass
@@ -92,9 +76,9 @@ def lane_metrics(label: str, mode: str, t_s: np.ndarray, e_cm: np.ndarray, x_mea
                  p_needed_kpa: np.ndarray | None = None, t_needed_s: np.ndarray | None = None,
                  output_active: np.ndarray | None = None) -> LaneMetrics:
     lo, hi = band
-    after = t_s >= (t_u_s if t_u_s is not None else (windows[0][0] if windows else 0.0))
-    max_after = float(np.max(np.abs(e_cm[after]))) if after.any() else None
-    outside_after = int(np.sum(np.abs(e_cm[after]) >= w1_cm)) if (w1_cm and after.any()) else None
+    t_after = t_u_s if t_u_s is not None else (windows[0][0] if windows else 0.0)
+    max_after = max_abs_from(t_s, e_cm, t_after)
+    outside_after = samples_outside_from(t_s, e_cm, w1_cm, t_after) if w1_cm else None
     viol = int(np.sum((x_meas_cm <= lo) | (x_meas_cm >= hi)))
     viol_true = int(np.sum((x_true_cm <= lo) | (x_true_cm >= hi)))
     outside = (x_meas_cm <= lo) | (x_meas_cm >= hi)

@@ -94,6 +94,10 @@ def test_metrics_on_known_signals():
     assert time_to_band(t, np.ones_like(t), 0.5) is None
     y = np.tile([0.0, 1.0], 500)
     assert total_variation_per_s(np.linspace(0, 1, 1000), y) == pytest.approx(999.0)
+    # the harness's figures are pmactl's (one module, one rule: pmactl/figures.py)
+    from pmactl import figures
+    assert (rmste, time_to_band, total_variation_per_s) == (figures.rmste, figures.time_to_band,
+                                                            figures.total_variation_per_s)
 
 
 @pytest.mark.parametrize("argv, code", [

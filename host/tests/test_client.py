@@ -5,12 +5,14 @@ parameter files and recordings."""
 from __future__ import annotations
 
 import json
+import math
 import os
 import re
 import time
 from pathlib import Path
 
 import can
+import numpy as np
 import pytest
 from fakenode import PROTO, UNKNOWN_ID, wait_until
 
@@ -278,12 +280,27 @@ def test_metrics() -> None:
     data.update(t=t, e=e, v=-e / 0.3, u=np.where(t < 1, 100.0 * e, 1.0), breaches=np.arange(len(t)) // 10)
     rec = Recording(Path("x.csv"), data, {}, {})
     m = metrics(rec, w1_cm=0.3, t_u_s=2.0)
-    assert m.band_entry_s == pytest.approx(0.57)       # first t with 2 exp(-t/0.3) < 0.3
+    assert m.time_to_band_s == pytest.approx(0.57)       # first t with 2 exp(-t/0.3) < 0.3
     assert m.converge_peak_v_cm_s == pytest.approx(2 * np.exp(-0.01 / 0.3) / 0.3)
     assert m.max_abs_e_after_tu_cm == pytest.approx(0.25)
     assert m.breaches == 39
     m = metrics(rec, w1_cm=0.2, t_u_s=2.0)
-    assert m.band_entry_s == pytest.approx(2.52)       # after the excursion
-    assert metrics(rec, w1_cm=1e-9).band_entry_s is None
+    assert m.time_to_band_s == pytest.approx(2.52)       # after the excursion
+    assert metrics(rec, w1_cm=1e-9).time_to_band_s is None
     lines = m.lines(0.2, 2.0)
     assert lines[1] == "|e| < w1 = 0.2 cm from t = 2.520 s on (t_u = 2 s)"
+
+
+def test_figures_count_a_nan_sample_as_outside_and_say_none_for_never() -> None:
+    """The one rule of pmactl/figures.py, which recordings and the HIL summary share."""
+    from pmactl import figures
+
+    t = np.arange(10) * 0.1
+    e = np.array([0.5, 0.1, 0.1, np.nan, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1])
+    assert figures.time_to_band(t, e, 0.2) == pytest.approx(0.4)          # the NaN is outside
+    assert figures.samples_outside_from(t, e, 0.2, 0.0) == 2
+    assert figures.rmste_from(t, e, 0.1) == pytest.approx(0.1)             # the NaN left out
+    assert figures.max_abs_from(t, e, None) == pytest.approx(0.5)
+    assert figures.time_to_band(t, np.full(10, 0.5), 0.2) is None          # never
+    assert figures.rmste_from(t, e, 5.0) is None and figures.max_abs_from(t, e, 5.0) is None
+    assert math.isnan(figures.rmste(t, e, [(5.0, 6.0)])[0])               # a window without samples

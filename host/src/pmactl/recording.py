@@ -155,8 +155,8 @@ class Metrics:
     rows: int
     t_first_s: float
     t_last_s: float
-    band_entry_s: float | None        # |e| < w1 from this time to the end (None: not at the end)
-    converge_peak_v_cm_s: float | None  # peaks while converging: until band_entry (or t_u)
+    time_to_band_s: float | None      # |e| < w1 from this time to the end (None: not at the end)
+    converge_peak_v_cm_s: float | None  # peaks while converging: until time_to_band (or t_u)
     converge_peak_u: float | None
     max_abs_e_after_tu_cm: float | None
     rmste_after_tu_cm: float | None   # root-mean-square tracking error for t >= t_u
@@ -169,12 +169,12 @@ class Metrics:
             return "-" if v is None else format(v, fmt)
         out = [f"{self.rows} rows, t {self.t_first_s:.3f}..{self.t_last_s:.3f} s"]
         if w1_cm is not None:
-            entry = (f"from t = {self.band_entry_s:.3f} s on" if self.band_entry_s is not None
+            entry = (f"from t = {self.time_to_band_s:.3f} s on" if self.time_to_band_s is not None
                      else "not at the end of the recording")
             tu = f" (t_u = {t_u_s:g} s)" if t_u_s is not None else ""
             out.append(f"|e| < w1 = {w1_cm:g} cm {entry}{tu}")
         if w1_cm is not None or t_u_s is not None:
-            until = "until then" if self.band_entry_s is not None else "until t_u"
+            until = "until then" if self.time_to_band_s is not None else "until t_u"
             out.append(f"{until}: peak |v| {num(self.converge_peak_v_cm_s, '.3g')} cm/s, "
                        f"peak |u| {num(self.converge_peak_u, '.3g')} {u_unit}")
         since = f"t >= t_u = {t_u_s:g} s" if t_u_s is not None else "the whole run"
@@ -188,15 +188,13 @@ class Metrics:
 
 
 def metrics(rec: Recording, w1_cm: float | None = None, t_u_s: float | None = None) -> Metrics:
+    """The recording's figures (pmactl/figures.py: their rules for NaN and "never")."""
     import numpy as np
 
+    from . import figures  # numpy: imported when needed (pmactl starts without it)
+
     t, e, v, u = rec["t"], rec["e"], rec["v"], rec["u"]
-    entry: float | None = None
-    if w1_cm is not None and len(t):
-        outside = ~(np.abs(e) < w1_cm)              # NaN counts as outside
-        if not outside[-1]:
-            idx = np.flatnonzero(outside)
-            entry = float(t[idx[-1] + 1]) if len(idx) else float(t[0])
+    entry = figures.time_to_band(t, e, w1_cm) if w1_cm is not None else None
 
     def peak(a: "np.ndarray", where: "np.ndarray") -> float | None:
         sel = a[where & ~np.isnan(a)]
@@ -205,14 +203,12 @@ def metrics(rec: Recording, w1_cm: float | None = None, t_u_s: float | None = No
     every = np.ones(len(t), dtype=bool)
     end = entry if entry is not None else t_u_s
     converging = t <= end if end is not None else np.zeros(len(t), dtype=bool)
-    after = t >= t_u_s if t_u_s is not None else every
-    ea = e[after & ~np.isnan(e)]
     b = rec["breaches"]
     bv = b[~np.isnan(b)]
     return Metrics(rows=len(t), t_first_s=float(t[0]) if len(t) else 0.0,
-                   t_last_s=float(t[-1]) if len(t) else 0.0, band_entry_s=entry,
+                   t_last_s=float(t[-1]) if len(t) else 0.0, time_to_band_s=entry,
                    converge_peak_v_cm_s=peak(v, converging), converge_peak_u=peak(u, converging),
-                   max_abs_e_after_tu_cm=float(np.max(np.abs(ea))) if len(ea) else None,
-                   rmste_after_tu_cm=float(np.sqrt(np.mean(ea ** 2))) if len(ea) else None,
+                   max_abs_e_after_tu_cm=figures.max_abs_from(t, e, t_u_s),
+                   rmste_after_tu_cm=figures.rmste_from(t, e, t_u_s),
                    peak_abs_v_cm_s=peak(v, every), peak_abs_u=peak(u, every),
                    breaches=int(bv[-1]) if len(bv) else None)
