@@ -16,13 +16,13 @@
 #       `run-<name>` that runs it: natively on host, on ARM under the same QEMU command with
 #       `-icount shift=0` (1 virtual ns == 1 instruction). The target `bench` runs all of them.
 #
-# Sanitizers: when PMA_TARGET is host, this file adds
+# Sanitizers: when PMA_TARGET is host, this file fills in the INTERFACE library pma_sanitize
+# (cmake/PmaFlags.cmake) with
 #   -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
-# to the compile and link options of every target defined after it is included (directory
-# scope: add_compile_options/add_link_options). The top-level CMakeLists.txt includes it before
-# add_subdirectory(firmware), so the firmware libraries the tests link are instrumented too.
-# Unity itself is defined before the options, uninstrumented (as a system library would be), so
-# that it links into ASan programs and into the one test that runs without ASan alike.
+# for compiling and linking; every target of the project's own code links it (pma_own_target),
+# so the firmware libraries the tests link are instrumented too. Unity and the test support
+# do not: uninstrumented (as a system library would be), they link into ASan programs and into
+# the one test that runs without ASan alike.
 # Host builds with PMA_BUILD_TESTS=OFF get no sanitizers. Set PMA_SANITIZE=OFF to turn them off.
 
 include_guard(GLOBAL)
@@ -47,7 +47,7 @@ target_compile_definitions(pma_unity PUBLIC UNITY_INCLUDE_DOUBLE UNITY_SUPPORT_6
 # whatever the link order (a test's own definitions override them).
 add_library(pma_test OBJECT "${PMA_TEST_SUPPORT_DIR}/pma_test.c")
 target_include_directories(pma_test PUBLIC "${PMA_TEST_SUPPORT_DIR}")
-target_link_libraries(pma_test PUBLIC pma_unity)
+target_link_libraries(pma_test PUBLIC pma_unity PRIVATE pma_warnings)
 
 if(PMA_TARGET STREQUAL "host")
   # ON (default) = "address,undefined"; "undefined" for programs that run inside the
@@ -62,9 +62,9 @@ if(PMA_TARGET STREQUAL "host")
     set(_pma_san "${PMA_SANITIZE}")
   endif()
   if(_pma_san)
-    add_compile_options(-fsanitize=${_pma_san} -fno-sanitize-recover=all
-                        -fno-omit-frame-pointer)
-    add_link_options(-fsanitize=${_pma_san})
+    target_compile_options(pma_sanitize INTERFACE -fsanitize=${_pma_san} -fno-sanitize-recover=all
+                           -fno-omit-frame-pointer)
+    target_link_options(pma_sanitize INTERFACE -fsanitize=${_pma_san})
   endif()
 elseif(NOT CMAKE_CROSSCOMPILING OR NOT DEFINED PMA_QEMU_BOARD)
   message(FATAL_ERROR "PMA_TARGET=${PMA_TARGET} needs the ARM toolchain file: "
@@ -93,6 +93,7 @@ else()
                "${PMA_QEMU_DIR}/${PMA_QEMU_BOARD}.ld" "${PMA_QEMU_DIR}/pma_sections.ld")
 endif()
 target_include_directories(pma_board PUBLIC "${PMA_QEMU_DIR}/include")
+pma_own_target(pma_board)
 if(NOT PMA_TARGET STREQUAL "host")
   option(PMA_QEMU_MEMORY_REPORT
          "ARM: print stack and heap high-water marks when a test or benchmark exits" OFF)
@@ -116,6 +117,7 @@ function(_pma_add_program name)
   add_executable(${name} ${ARG_SOURCES})
   target_include_directories(${name} PRIVATE ${ARG_INCLUDES})
   target_link_libraries(${name} PRIVATE ${ARG_LIBRARIES} pma_board)
+  pma_own_target(${name})
   if(NOT PMA_TARGET STREQUAL "host")
     set_target_properties(${name} PROPERTIES SUFFIX ".elf")
     target_link_options(${name} PRIVATE "-Wl,-Map=${CMAKE_CURRENT_BINARY_DIR}/${name}.map")

@@ -265,7 +265,7 @@ static void on_param_req(pma_app_t *app, const pma_can_frame_t *f)
     const pma_param_value_t zero = {.u32 = 0};
     const uint8_t op = f->dlc > 0 ? (uint8_t)(f->data[0] & 0x0Fu) : 0u;
     const uint8_t req_type = f->dlc > 0 ? (uint8_t)(f->data[0] >> 4) : 0u;
-    const uint16_t id = f->dlc > 2 ? (uint16_t)(f->data[1] | (f->data[2] << 8)) : 0u;
+    const uint16_t id = (uint16_t)(f->dlc > 2 ? (unsigned)f->data[1] | ((unsigned)f->data[2] << 8) : 0u);
     struct pma_proto_param_req_t m;
     memset(&m, 0, sizeof m);
     if (f->dlc != PMA_PROTO_PARAM_REQ_LENGTH || pma_proto_param_req_unpack(&m, f->data, f->dlc) != 0) {

@@ -36,8 +36,8 @@ int pma_velest_validate_config(const pma_velest_config_t *cfg)
 float pma_velest_noise_gain(const pma_velest_config_t *cfg)
 {
     if (pma_velest_validate_config(cfg) != PMA_OK) return NAN;
-    const double T = cfg->period_s;
-    const double p = exp(-2.0 * PMA_PI * cfg->fc_hz * T);
+    const double T = (double)cfg->period_s; /* this figure is computed in double */
+    const double p = exp(-2.0 * PMA_PI * (double)cfg->fc_hz * T);
     if (cfg->kind == PMA_VELEST_FILTERED_DIFF) {
         return (float)((1.0 - p) / T * sqrt(2.0 / (1.0 + p)));
     }
