@@ -459,7 +459,9 @@ static void check_output_untouched(const snap_t *s)
  *   STOP      RUNNING/ARMED -> ARMED
  *   ESTOP     any -> FAULT (ESTOP, unless a fault is already latched)
  *   CLEAR     FAULT -> IDLE (not while bus-off), else nothing
- *   SELECT_*  ctrl.mode / ref.kind = Arg, not while RUNNING ("stopped") */
+ *   SELECT_*  ctrl.mode / ref.kind = Arg, not while RUNNING ("stopped")
+ *   RESTART   only with the output inactive; nothing changes until the step
+ *             ends, then the system reset (serve_reset: the MCU starts again) */
 static void check_command(const snap_t *s, uint8_t cmd, uint8_t arg, int result)
 {
     const pma_app_t *a = &w.app;
@@ -514,6 +516,9 @@ static void check_command(const snap_t *s, uint8_t cmd, uint8_t arg, int result)
         CHECK(field_bits(&a->params, pma_param_find(id)) == arg);
         break;
     }
+    case PMA_CMD_RESTART:
+        CHECK(!is_active(s->state) && a->state == s->state && a->restart_pending);
+        break;
     default:
         CHECK(!"an unknown command succeeded");
     }
@@ -674,8 +679,10 @@ static void deliver(const pma_can_frame_t *f)
     if (info_req) {
         /* the identity: DEVICE_INFO pages only (at most one of each, fewer when the TX
          * queue is full), nothing else changes; another length is dropped and counted */
-        CHECK(w.tx.total == w.tx.info);
-        CHECK(w.tx.info <= PMA_PROTO_DEVICE_INFO_PAGE_UID_HIGH_CHOICE + 1u);
+        if (!w.tx_faults) { /* frames held by a blocked TX, duplicates: not this request's */
+            CHECK(w.tx.total == w.tx.info);
+            CHECK(w.tx.info <= PMA_PROTO_DEVICE_INFO_PAGE_UID_HIGH_CHOICE + 1u);
+        }
         CHECK(a->state == s.state && a->fault == s.fault);
         CHECK(params_diff(&s.params, &a->params, NULL) == 0);
         if (f->dlc != PMA_PROTO_DEVICE_INFO_REQ_LENGTH) {
@@ -1003,6 +1010,18 @@ static void op_tick(uint8_t a, uint8_t b, uint8_t c, const uint8_t *d)
     }
 }
 
+/* After a step: a RESTART it accepted asked for the system reset at its end
+ * (the fake only counts it): the output was inactive, and the MCU starts again
+ * as after any software reset. */
+static void serve_reset(void)
+{
+    if (pma_fake_system_reset_requests() == 0) return;
+    CHECK(pma_fake_system_reset_requests() == 1u && !is_active(w.app.state) && !w.app.restart_pending);
+    drain();
+    pma_fake_reboot(); /* SOFTWARE (WATCHDOG if the watchdog expired meanwhile) */
+    start_app();
+}
+
 /* pma_app_step written out stage by stage (same order, same bound). */
 static void op_step(uint8_t b)
 {
@@ -1018,6 +1037,11 @@ static void op_step(uint8_t b)
         do_tick(late);
         do_poll();
         pma_hal_watchdog_kick();
+        if (w.app.restart_pending) {
+            w.app.restart_pending = 0;
+            pma_hal_system_reset();
+        }
+        serve_reset();
     }
 }
 
@@ -1035,6 +1059,7 @@ static void op_real_step(uint8_t b)
         drain();
         if (pma_fake_dac_write_count() != writes || w.tx.actuator > 0) w.phys = PHYS_UNKNOWN;
         check_always();
+        serve_reset();
     }
 }
 
