@@ -1,6 +1,9 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* The application's loop, state machine and output: see app.h. Frames and
- * their encoding are in app_frames.c. */
+/* The application's core: start-up, the state machine and its commands, one
+ * control tick (acquire, law, supervisor, output) and the housekeeping of
+ * poll. It sends no frame: what a tick or poll has to send it marks in
+ * app->tx_due, and the orchestrating step (app_step.c) has the frames adapter
+ * (app_frames.c) send it. See app.h. */
 #include "app.h"
 
 #include <math.h>
@@ -8,7 +11,7 @@
 #include <string.h>
 
 #include "actuator.h"
-#include "app_internal.h"
+#include "app_core.h"
 #include "generated/pma_proto.h"
 
 _Static_assert(PMA_PARAMS_BLOB_BYTES <= PMA_PSTORE_MAX_BLOB_BYTES,
@@ -215,9 +218,8 @@ int pma_app_load_params(pma_app_t *app)
     return PMA_OK;
 }
 
-int pma_app_init(pma_app_t *app, const pma_app_platform_t *plat)
+int pma_app_core_init(pma_app_t *app, const pma_app_platform_t *plat)
 {
-    if (app == NULL || plat == NULL) return PMA_ERR_NULL;
     memset(app, 0, sizeof *app);
     app->plat = *plat;
     app->state = PMA_STATE_BOOT;
@@ -240,8 +242,11 @@ int pma_app_init(pma_app_t *app, const pma_app_platform_t *plat)
         {.id = PMA_PROTO_ESTOP_ALL_FRAME_ID, .mask = PMA_CAN_ID_MAX},
         {.id = PMA_PROTO_DEVICE_INFO_REQ_ALL_FRAME_ID, .mask = PMA_CAN_ID_MAX},
     };
-    int rc = pma_hal_can_set_filters(filters, 3u);
-    pma_app_send_heartbeat(app); /* the BOOT heartbeat: "I have (re)started" */
+    return pma_hal_can_set_filters(filters, 3u);
+}
+
+int pma_app_core_init_finish(pma_app_t *app, int rc)
+{
     if (rc == PMA_OK) rc = pma_app_apply_timing(app);
     app->next_heartbeat_us = pma_hal_time_us() + 1000u * (uint64_t)app->params.sys_heartbeat_ms;
     if (rc != PMA_OK) {
@@ -413,13 +418,12 @@ static void write_output(pma_app_t *app)
         pma_app_raise_fault(app, PMA_FAULT_OUTPUT);
         app->dac_counts = 0;
     }
-    int rc;
     if (pma_app_bridge_on(app)) {
-        rc = pma_app_send_actuator(app);
-    } else {
-        rc = pma_hal_dac_write(app->dac_counts);
+        app->tx_due |= PMA_APP_TX_ACTUATOR; /* the plant bridge's output: a frame */
+        return;
     }
-    if (rc != PMA_OK && !pma_app_bridge_on(app)) {
+    const int rc = pma_hal_dac_write(app->dac_counts);
+    if (rc != PMA_OK) {
         /* the DAC refused the value (or failed): never leave an earlier,
          * perhaps active, command on the output. Try the safe value, and if
          * the DAC refuses that too, 0 counts (0 V / 0 mA: a regulator's
@@ -442,9 +446,8 @@ static uint32_t ms_to_ticks(uint32_t ms, uint32_t tick_hz)
     return t == 0 ? 1u : (t > UINT32_MAX ? UINT32_MAX : (uint32_t)t);
 }
 
-void pma_app_tick(pma_app_t *app, uint32_t late_ticks)
+void pma_app_core_tick(pma_app_t *app, uint32_t late_ticks)
 {
-    if (app == NULL || app->state == PMA_STATE_BOOT) return;
     pma_app_sync_bridge(app);
     ++app->ticks;
     app->late_ticks = late_ticks;
@@ -498,16 +501,15 @@ void pma_app_tick(pma_app_t *app, uint32_t late_ticks)
     if (app->state == PMA_STATE_RUNNING && p->telem_decimation != 0) {
         if (++app->telem_count >= p->telem_decimation) {
             app->telem_count = 0;
-            pma_app_send_telemetry(app);
+            app->tx_due |= PMA_APP_TX_TELEMETRY;
         }
     }
 }
 
 /* ------------------------------------------------------------------ poll -- */
 
-void pma_app_poll(pma_app_t *app)
+void pma_app_core_poll(pma_app_t *app)
 {
-    if (app == NULL) return;
     pma_can_status_t cs;
     if (pma_hal_can_status(&cs) == PMA_OK && cs.state == PMA_CAN_BUS_OFF) {
         /* explicit bus-off handling: latch the fault (the output goes safe at
@@ -522,88 +524,9 @@ void pma_app_poll(pma_app_t *app)
     }
     const uint64_t now = pma_hal_time_us();
     if (now >= app->next_heartbeat_us) {
-        pma_app_send_heartbeat(app);
+        app->tx_due |= PMA_APP_TX_HEARTBEAT;
         const uint64_t period = 1000u * (uint64_t)app->params.sys_heartbeat_ms;
         app->next_heartbeat_us += period;
         if (app->next_heartbeat_us <= now) app->next_heartbeat_us = now + period;
     }
-}
-
-/* A request to this node: a frame that is answered (COMMAND, PARAM_REQ). */
-static int is_request(const pma_app_t *app, const pma_can_frame_t *f)
-{
-    const uint16_t base = (uint16_t)(f->id & PMA_BASE_ID_MASK);
-    return f->id <= PMA_CAN_ID_MAX && (f->id & PMA_NODE_ID_MASK) == app->node_id &&
-           (base == PMA_PROTO_COMMAND_FRAME_ID || base == PMA_PROTO_PARAM_REQ_FRAME_ID) &&
-           f->id != PMA_PROTO_ESTOP_ALL_FRAME_ID;
-}
-
-/* The request queue is full and f arrives: a COMMAND (START, STOP, DISARM ...)
- * takes the place of the newest queued PARAM_REQ, which is dropped; the order of
- * the others is kept. Returns 0 when f is to be dropped instead. */
-static int evict_param_req(pma_app_t *app, const pma_can_frame_t *f)
-{
-    if ((f->id & PMA_BASE_ID_MASK) != PMA_PROTO_COMMAND_FRAME_ID) return 0;
-    for (unsigned k = app->req_q_count; k-- > 0;) {
-        const unsigned at = (app->req_q_head + k) % PMA_APP_PARAM_REQ_QUEUE;
-        if ((app->req_q[at].id & PMA_BASE_ID_MASK) != PMA_PROTO_PARAM_REQ_FRAME_ID) continue;
-        for (unsigned j = k; j + 1u < app->req_q_count; ++j) {
-            app->req_q[(app->req_q_head + j) % PMA_APP_PARAM_REQ_QUEUE] =
-                app->req_q[(app->req_q_head + j + 1u) % PMA_APP_PARAM_REQ_QUEUE];
-        }
-        --app->req_q_count;
-        ++app->counters.frames_rx;
-        ++app->counters.req_dropped;
-        return 1;
-    }
-    return 0;
-}
-
-int pma_app_step(pma_app_t *app)
-{
-    if (app == NULL) return PMA_ERR_NULL;
-    uint32_t late = 0;
-    const int rc = pma_hal_tick_wait(&late);
-    pma_can_frame_t f;
-    const uint16_t sample_id = (uint16_t)(PMA_PROTO_PLANT_SENSOR_FRAME_ID | app->node_id);
-    unsigned fresh = 0; /* requests queued in this iteration */
-    /* lockstep: the port reported a tick, i.e. the sample is in its RX queue: read up to
-     * it whatever the bound (the queue is finite), so that the tick has its sample */
-    const int need_sample = app->plat.lockstep && rc == PMA_OK;
-    for (unsigned i = 0; (i < PMA_APP_RX_PER_STEP || need_sample) && pma_hal_can_recv(&f) == PMA_OK; ++i) {
-        if (is_request(app, &f)) {
-            /* answered later in this iteration, in order, at most
-             * PMA_APP_PARAM_REQ_PER_STEP of them: a flood of requests never
-             * delays the tick or the frames that feed it */
-            if (app->req_q_count == PMA_APP_PARAM_REQ_QUEUE && !evict_param_req(app, &f)) {
-                ++app->counters.frames_rx;
-                ++app->counters.req_dropped; /* dropped unanswered */
-                continue;
-            }
-            app->req_q[(app->req_q_head + app->req_q_count) % PMA_APP_PARAM_REQ_QUEUE] = f;
-            ++app->req_q_count;
-            ++fresh;
-            continue;
-        }
-        pma_app_handle_frame(app, &f);
-        /* lockstep: each sample is its own tick; later frames (perhaps the
-         * next sample) wait for the next iteration, which the port grants */
-        if (app->plat.lockstep && f.id == sample_id && f.dlc == PMA_PROTO_PLANT_SENSOR_LENGTH) break;
-    }
-    for (unsigned n = 0; n < PMA_APP_PARAM_REQ_PER_STEP && app->req_q_count > 0; ++n) {
-        const pma_can_frame_t req = app->req_q[app->req_q_head];
-        app->req_q_head = (uint8_t)((app->req_q_head + 1u) % PMA_APP_PARAM_REQ_QUEUE);
-        --app->req_q_count;
-        pma_app_handle_frame(app, &req);
-    }
-    app->counters.req_deferred += fresh < app->req_q_count ? fresh : app->req_q_count;
-    if (rc == PMA_OK) pma_app_tick(app, late);
-    pma_app_poll(app);
-    pma_hal_watchdog_kick();
-    if (app->restart_pending) {
-        /* RESTART: its COMMAND_ACK is queued; the port sends it, then resets */
-        app->restart_pending = 0;
-        pma_hal_system_reset();
-    }
-    return rc == PMA_ERR_EMPTY ? PMA_OK : rc;
 }

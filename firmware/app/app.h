@@ -84,6 +84,12 @@ typedef enum pma_param_op {
 #define PMA_HB_GUARANTEE_LOST  0x0200u /* PPC: the guarantee was lost since START (controller.h) */
 #define PMA_HB_FALLBACK        0x0400u /* PPC: MFAC is in charge (ppc.fallback 1) */
 
+/* pma_app_t.tx_due: the frames a tick or poll of the core has to send (the step
+ * has the frames adapter send them). */
+#define PMA_APP_TX_ACTUATOR  0x01u /* PLANT_ACTUATOR (plant bridge) */
+#define PMA_APP_TX_TELEMETRY 0x02u /* TELEM_A..E (telem.mask) */
+#define PMA_APP_TX_HEARTBEAT 0x04u /* HEARTBEAT */
+
 /* telem.mask bits: which telemetry frames a telemetry tick sends. */
 #define PMA_TELEM_MASK_A 0x01u /* TELEM_A: run time, x */
 #define PMA_TELEM_MASK_B 0x02u /* TELEM_B: x_r, e */
@@ -188,6 +194,7 @@ typedef struct pma_app {
     uint8_t node_id;
     uint8_t reset_cause;
     uint8_t restart_pending;       /* RESTART accepted: pma_hal_system_reset() ends this step */
+    uint8_t tx_due;                /* PMA_APP_TX_*: what the core's tick and poll have to send */
     /* storage */
     pma_pstore_t store;
     uint8_t store_ready, params_changed, params_default, save_failed;
@@ -254,6 +261,24 @@ int pma_app_step(pma_app_t *app);
  * result code. RESTART only schedules the reset for the end of the step;
  * until then every other command but ESTOP is refused (PMA_ERR_STATE). */
 int pma_app_command(pma_app_t *app, uint8_t command, uint8_t arg);
+
+/* The parameter API (app_params.c): every transport's access to the parameters,
+ * by id, with the application's policy; PARAM_REQ only decodes and encodes it.
+ * set: the value checked against the table's range and access class for the
+ * state, then on a trial copy against the rules between parameters that every
+ * SET enforces (the sensor and DAC scalings as a group; a refusal records the
+ * rule for GET_STATUS LAST_RULE); a new tick or heartbeat period applies at
+ * once. get: the value and its type. save / load / restore_defaults: the
+ * whole set to storage, from storage, to the defaults in RAM (not while the
+ * output is active). status: a counter or status value by id (PMA_STATUS_*).
+ * Each returns PMA_OK or a negative pma_status_t; a refused call changes
+ * nothing. */
+int pma_app_param_set(pma_app_t *app, uint16_t id, pma_param_type_t type, pma_param_value_t value);
+int pma_app_param_get(const pma_app_t *app, uint16_t id, pma_param_type_t *type, pma_param_value_t *value);
+int pma_app_params_save(pma_app_t *app);
+int pma_app_params_load(pma_app_t *app);
+int pma_app_params_restore_defaults(pma_app_t *app);
+int pma_app_status_value(const pma_app_t *app, uint16_t id, uint32_t *value);
 
 /* Latches a fault (the first one wins) and enters FAULT. */
 void pma_app_raise_fault(pma_app_t *app, pma_fault_t fault);

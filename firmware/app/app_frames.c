@@ -14,7 +14,8 @@
 #include <math.h>
 #include <string.h>
 
-#include "app_internal.h"
+#include "app_core.h"
+#include "app_frames.h"
 #include "generated/pma_proto.h"
 #include "generated/pma_proto_ties.h"
 
@@ -212,54 +213,6 @@ static void on_setpoint(pma_app_t *app, const pma_can_frame_t *f)
     }
 }
 
-static int whole_set_op(pma_app_t *app, uint8_t op)
-{
-    if (pma_app_phase(app) != PMA_PHASE_INACTIVE) return PMA_ERR_STATE;
-    switch (op) {
-    case PMA_PARAM_OP_SAVE: {
-        if (!app->store_ready) return PMA_ERR_NOT_IMPLEMENTED;
-        uint8_t blob[PMA_PARAMS_BLOB_BYTES];
-        const size_t n = pma_params_serialize(&app->params, blob, sizeof blob);
-        const int rc = pma_pstore_save(&app->store, blob, n, PMA_PARAMS_BLOB_VERSION);
-        app->save_failed = (uint8_t)(rc != PMA_OK);
-        if (rc == PMA_OK) app->params_changed = 0;
-        return rc;
-    }
-    case PMA_PARAM_OP_RESTORE_DEFAULTS:
-        pma_params_defaults(&app->params);
-        app->params_changed = 1;
-        return pma_app_apply_timing(app);
-    default: { /* LOAD */
-        const int rc = pma_app_load_params(app);
-        if (rc != PMA_OK) return rc;
-        return pma_app_apply_timing(app);
-    }
-    }
-}
-
-/* GET_STATUS: the node's counters and status values (PMA_STATUS_*, app.h). */
-static int status_value(const pma_app_t *app, uint16_t id, uint32_t *out)
-{
-    pma_can_status_t cs;
-    switch (id) {
-    case PMA_STATUS_LAST_RULE: *out = app->last_rule; return PMA_OK;
-    case PMA_STATUS_RX_OVERRUNS:
-        *out = pma_hal_can_status(&cs) == PMA_OK ? cs.rx_overruns : 0u;
-        return PMA_OK;
-    case PMA_STATUS_RX_DEFERRED: *out = app->counters.req_deferred; return PMA_OK;
-    case PMA_STATUS_RX_DROPPED: *out = app->counters.req_dropped; return PMA_OK;
-    case PMA_STATUS_FRAMES_BAD: *out = app->counters.frames_bad; return PMA_OK;
-    case PMA_STATUS_TICKS: *out = (uint32_t)app->ticks; return PMA_OK;
-    case PMA_STATUS_FRAMES_RX: *out = app->counters.frames_rx; return PMA_OK;
-    case PMA_STATUS_GUARANTEE_LOST_TICKS: *out = app->ctrl.lost_ticks; return PMA_OK;
-    case PMA_STATUS_GUARANTEE_LOST_AT_MS:
-        *out = app->ctrl.lost ? (uint32_t)lroundf(app->ctrl.lost_at_s * 1000.0f) : UINT32_MAX;
-        return PMA_OK;
-    case PMA_STATUS_BARRIER_BREACHES: *out = app->ctrl.breaches; return PMA_OK;
-    default: *out = 0; return PMA_ERR_UNKNOWN_ID;
-    }
-}
-
 static void on_param_req(pma_app_t *app, const pma_can_frame_t *f)
 {
     const pma_param_value_t zero = {.u32 = 0};
@@ -283,40 +236,27 @@ static void on_param_req(pma_app_t *app, const pma_can_frame_t *f)
     int rc = PMA_OK;
     switch (op) {
     case PMA_PARAM_OP_GET:
-        rc = pma_param_get(&app->params, id, &type, &v);
+        rc = pma_app_param_get(app, id, &type, &v);
         break;
     case PMA_PARAM_OP_SET: {
-        if (d == NULL) {
-            rc = PMA_ERR_UNKNOWN_ID; /* the id first, whatever the Type (docs/protocol.md) */
-        } else if (req_type > PMA_PARAM_I32) {
-            rc = PMA_ERR_TYPE;
-        } else {
-            pma_param_value_t nv;
-            nv.u32 = m.value_u32; /* the raw bits: the codec unpacks only the Type's signal */
-            if (req_type == PMA_PARAM_F32) nv.f32 = m.value_f32;
-            if (req_type == PMA_PARAM_I32) nv.i32 = m.value_i32;
-            rc = pma_param_check(id, (pma_param_type_t)req_type, nv, pma_app_phase(app));
-            if (rc == PMA_OK) { /* the scalings must stay consistent as a group */
-                pma_params_t trial = app->params;
-                (void)pma_param_set(&trial, id, (pma_param_type_t)req_type, nv, pma_app_phase(app));
-                rc = pma_app_check_param_groups(&trial);
-                if (rc == PMA_ERR_RANGE) app->last_rule = (uint8_t)pma_app_param_rule(&trial, 1);
-                if (rc == PMA_OK) app->params = trial;
-            }
-            if (rc == PMA_OK) {
-                app->params_changed = 1;
-                if (id == PMA_PARAM_SYS_TICK_HZ || id == PMA_PARAM_SYS_HEARTBEAT_MS) {
-                    rc = pma_app_apply_timing(app); /* the new periods from now on */
-                }
-            }
-        }
-        if (d != NULL) (void)pma_param_get(&app->params, id, &type, &v); /* the value now */
+        pma_param_value_t nv;
+        nv.u32 = m.value_u32; /* the raw bits: the codec unpacks only the Type's signal */
+        if (req_type == PMA_PARAM_F32) nv.f32 = m.value_f32;
+        if (req_type == PMA_PARAM_I32) nv.i32 = m.value_i32;
+        rc = pma_app_param_set(app, id, (pma_param_type_t)req_type, nv);
+        if (d != NULL) (void)pma_app_param_get(app, id, &type, &v); /* the value now */
         break;
     }
     case PMA_PARAM_OP_SAVE:
+        rc = pma_app_params_save(app);
+        type = (pma_param_type_t)req_type;
+        break;
     case PMA_PARAM_OP_RESTORE_DEFAULTS:
+        rc = pma_app_params_restore_defaults(app);
+        type = (pma_param_type_t)req_type;
+        break;
     case PMA_PARAM_OP_LOAD:
-        rc = whole_set_op(app, op);
+        rc = pma_app_params_load(app);
         type = (pma_param_type_t)req_type;
         break;
     case PMA_PARAM_OP_GET_MIN:
@@ -337,7 +277,7 @@ static void on_param_req(pma_app_t *app, const pma_can_frame_t *f)
     }
     case PMA_PARAM_OP_GET_STATUS:
         type = PMA_PARAM_U32;
-        rc = status_value(app, id, &v.u32);
+        rc = pma_app_status_value(app, id, &v.u32);
         break;
     default:
         rc = PMA_ERR_UNKNOWN_COMMAND;
@@ -396,4 +336,13 @@ void pma_app_handle_frame(pma_app_t *app, const pma_can_frame_t *f)
         ++app->counters.frames_ignored;
         break;
     }
+}
+
+void pma_app_send_due(pma_app_t *app)
+{
+    const uint8_t due = app->tx_due;
+    app->tx_due = 0;
+    if (due & PMA_APP_TX_ACTUATOR) (void)pma_app_send_actuator(app);
+    if (due & PMA_APP_TX_TELEMETRY) pma_app_send_telemetry(app);
+    if (due & PMA_APP_TX_HEARTBEAT) pma_app_send_heartbeat(app);
 }

@@ -7,7 +7,8 @@
  * (generated/pma_param_table.h), the unique id from the platform (pma_app_platform_t). */
 #include <string.h>
 
-#include "app_internal.h"
+#include "app_core.h"
+#include "app_frames.h"
 #include "build_info.h"
 #include "generated/pma_proto.h"
 #include "generated/pma_proto_version.h"

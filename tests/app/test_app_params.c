@@ -240,6 +240,46 @@ static void test_access_by_phase(void)
     TEST_ASSERT_EQUAL_INT(PMA_PARAM_LIVE, pma_param_find(PMA_PARAM_CTRL_OPENLOOP_U)->access);
 }
 
+/* The parameter API (app.h) as a second transport would call it: the same
+ * policy as PARAM_REQ, and not one frame sent. */
+static void test_parameter_api_without_frames(void)
+{
+    start_with(0, -1.5f);
+    cap_clear();
+    pma_param_value_t v = {.u32 = 500};
+    assert_status(pma_app_param_set(&app, PMA_PARAM_SYS_TICK_HZ, PMA_PARAM_U32, v), PMA_OK);
+    TEST_ASSERT_EQUAL_UINT32(2000u, app.period_us);            /* the new tick period at once */
+    TEST_ASSERT_EQUAL_INT(1, app.params_changed);
+    pma_param_type_t t = PMA_PARAM_F32;
+    pma_param_value_t got = {.u32 = 0};
+    assert_status(pma_app_param_get(&app, PMA_PARAM_SYS_TICK_HZ, &t, &got), PMA_OK);
+    TEST_ASSERT_EQUAL_INT(PMA_PARAM_U32, t);
+    TEST_ASSERT_EQUAL_UINT32(500u, got.u32);
+    /* refusals change nothing: an unknown id, a wrong type, a rule between parameters */
+    const pma_params_t before = app.params;
+    assert_status(pma_app_param_set(&app, 999u, PMA_PARAM_U32, v), PMA_ERR_UNKNOWN_ID);
+    assert_status(pma_app_param_set(&app, PMA_PARAM_SYS_TICK_HZ, (pma_param_type_t)7, v), PMA_ERR_TYPE);
+    pma_param_value_t zero = {.f32 = 0.0f};
+    assert_status(pma_app_param_set(&app, PMA_PARAM_ADC_GAIN_CM_PER_COUNT, PMA_PARAM_F32, zero),
+                  PMA_ERR_RANGE);
+    TEST_ASSERT_EQUAL_INT(PMA_RULE_ADC_GAIN, app.last_rule);
+    TEST_ASSERT_EQUAL_MEMORY(&before, &app.params, sizeof before);
+    uint32_t rule = 0;
+    assert_status(pma_app_status_value(&app, PMA_STATUS_LAST_RULE, &rule), PMA_OK);
+    TEST_ASSERT_EQUAL_UINT32(PMA_RULE_ADC_GAIN, rule);
+    assert_status(pma_app_status_value(&app, 0xFFFFu, &rule), PMA_ERR_UNKNOWN_ID);
+    /* the whole set: no storage attached here; the defaults back, the timing with them */
+    assert_status(pma_app_params_save(&app), PMA_ERR_NOT_IMPLEMENTED);
+    assert_status(pma_app_params_restore_defaults(&app), PMA_OK);
+    TEST_ASSERT_EQUAL_UINT32(T_PERIOD_US, app.period_us);
+    drain();
+    TEST_ASSERT_EQUAL_INT(0, cap.total);                        /* nothing on the bus */
+    /* not while the output is active */
+    to_armed(0);
+    assert_status(pma_app_params_restore_defaults(&app), PMA_ERR_STATE);
+    assert_status(pma_app_params_load(&app), PMA_ERR_STATE);
+}
+
 static void test_next_id_enumerates_in_order(void)
 {
     uint16_t id = 0, next = 0;
@@ -389,5 +429,6 @@ int main(void)
     RUN_TEST(test_deserialize_skips_unknown_ids);
     RUN_TEST(test_deserialize_rejects_to_default);
     RUN_TEST(test_deserialize_partial_and_bad_length);
+    RUN_TEST(test_parameter_api_without_frames);
     return UNITY_END();
 }

@@ -234,7 +234,7 @@ def test_lockstep_queued_samples_each_make_their_own_tick(firmware, bus, depth) 
     acts = [(s["Seq"], PROTO._choices("PLANT_ACTUATOR", "Sample")[s["Sample"]], s["OutputActive"])
             for name, nid, s in got if name == "PLANT_ACTUATOR" and nid == NODE]
     hb = fresh_heartbeat(node)
-    # Regression (a bug found by this test, now fixed): firmware/app/app.c pma_app_step()
+    # Regression (a bug found by this test, now fixed): firmware/app/app_step.c pma_app_step()
     # handles up to PMA_APP_RX_PER_STEP (64) received frames before the one tick that tick_wait() granted, so
     # every queued sample but the last is overwritten before any tick uses
     # it: one NEW tick with the last Seq, then REPEATED ticks (and, from
