@@ -7,8 +7,8 @@
 # acceptance tests (the paper's experiments, on the real firmware offline), the
 # hil/with-vcan tests beside a bounded libFuzzer run of the CAN frame handler; then
 # side by side in two vcan guests: the integration tests of pma-fw-host and pmactl over
-# vcan, the main job's quick variant and the offline runs against it (to the last
-# digit) | the HIL checks only the CAN path has, the tuning session, the HIL benchmark.
+# vcan and the HIL checks only the CAN path has | the main job's quick variant and the
+# offline runs against it (to the last digit), the tuning session, the HIL benchmark.
 # Stages that share the two CPUs well run side by side. Exits non-zero on any failure. Prints each stage's
 # duration at the end (also when a stage fails).
 #
@@ -131,25 +131,26 @@ side_by_side() {
   fi
 }
 
-# The two vcan lanes are balanced by their measured durations (build/ci-logs/lane*.seconds).
-# The first guest: the firmware over vcan (its CAN interface, commands, parameters, storage,
-# faults and identity, and pmactl driving it), then the README main job's quick variant and
-# the offline runs against that lockstep run over vcan, to the last digit (and a fault).
+# The two vcan lanes, balanced by their measured durations (build/ci-logs/lane*.seconds; here:
+# integration 452 s + HIL checks 62 s | main job quick about 330 s + comparison + tuning session
+# 143 s + benchmark). The first guest: the firmware over vcan (its CAN interface, commands,
+# parameters, storage, faults and identity, and pmactl driving it), then what only the CAN path
+# of the HIL has (bus log, identity, clean stops, --board).
 vcan_integration() {
   hil/with-vcan .venv/bin/python -m pytest -q tests/integration host/tests/integration/test_pmactl_fw.py
+  echo "-- HIL over vcan: bus log, identity, clean stops, --board"
+  hil/with-vcan .venv/bin/python -m pytest -q hil/tests/test_hil_acceptance.py
+}
+
+# The second guest, one after the other: the README main job's quick variant, the offline runs
+# against that lockstep run over vcan, to the last digit (and a fault), the tuning session of
+# docs/tuning.md, the lockstep benchmark (printed, never asserted).
+vcan_hil() {
   echo "-- the README's main job, quick variant (Case 3, first 30 s, each lane commissioned, PPC vs MFAC)"
   env OUT=build/hil/ci-quick bash tools/run-demo.sh --no-setup --quick --no-progress
   echo "-- offline == over CAN (that quick run, and a fault)"
   PMA_OFFLINE_COMPARE_RUN=build/hil/ci-quick hil/with-vcan .venv/bin/python -m pytest -q \
     hil/tests/test_offline_vs_hil.py
-}
-
-# The second guest, one after the other: what only the CAN path of the HIL has (bus log,
-# identity, clean stops, --board); the tuning session of docs/tuning.md; the lockstep
-# benchmark (printed, never asserted).
-vcan_hil() {
-  echo "-- HIL over vcan: bus log, identity, clean stops, --board"
-  hil/with-vcan .venv/bin/python -m pytest -q hil/tests/test_hil_acceptance.py
   echo "-- docs/tuning.md's worked tuning session, pmactl against pma-fw-host over vcan"
   hil/with-vcan .venv/bin/python -m pytest -q host/tests/integration/test_tuning_session.py
   echo "-- HIL lockstep benchmark (printed, never asserted)"
@@ -189,8 +190,8 @@ stage "HIL acceptance offline (the paper's Cases 1-3, MFAC, PID, load change, co
 stage "rig variants offline (Case 3 on rigs the set was not tuned on: no fault, the guarantee or its flagged loss, about MFAC's error)" \
   .venv/bin/python -m pytest -q hil/tests/test_rig_variants.py
 side_by_side "hil/with-vcan" with_vcan_tests "fuzz (libFuzzer on the CAN frame handler, ASan + UBSan, 60 s)" fuzz_60s
-side_by_side "vcan: integration tests (pma-fw-host, python-can, can-utils, pmactl), main job quick, offline == over CAN" \
-  vcan_integration "vcan: HIL CAN-only checks, tuning session, benchmark" vcan_hil
+side_by_side "vcan: integration tests (pma-fw-host, python-can, can-utils, pmactl), HIL CAN-only checks" \
+  vcan_integration "vcan: main job quick, offline == over CAN, tuning session, benchmark" vcan_hil
 if ((FAILED_STAGES > 0)); then
   echo "run-tests: $FAILED_STAGES stage(s) failed (PMA_KEEP_GOING=1)"
   exit 1
