@@ -4,8 +4,9 @@
 # preset's CTest suite (Unity; host with ASan/UBSan; Cortex-M4F, M3, M0 under QEMU),
 # the generated code's freshness, the Python tests (numpy golden reference,
 # protocol and DBC consistency, the offline runs' library layer), the HIL
-# acceptance tests (the paper's experiments, on the real firmware offline), the
-# hil/with-vcan tests beside a bounded libFuzzer run of the CAN frame handler; then
+# acceptance tests (the paper's experiments, on the real firmware offline), the rig
+# variants beside a bounded libFuzzer run of the CAN frame handler, the hil/with-vcan
+# tests; then
 # side by side in two vcan guests: the integration tests of pma-fw-host and pmactl over
 # vcan and the HIL checks only the CAN path has | the main job's quick variant and the
 # offline runs against it (to the last digit), the tuning session, the HIL benchmark.
@@ -160,7 +161,7 @@ vcan_hil() {
 # Stages of one process each that can share the two CPUs.
 no_can_pytest() { .venv/bin/python -m pytest -q "${NO_CAN_TESTS[@]}"; }
 pmactl_unit_tests() { .venv/bin/python -m pytest -q host/tests --ignore=host/tests/integration; }
-with_vcan_tests() { bash hil/tests/test_with_vcan.sh; }
+rig_variants() { .venv/bin/python -m pytest -q hil/tests/test_rig_variants.py; }
 fuzz_60s() { bash tools/fuzz.sh 60; }
 
 NO_CAN_TESTS=(tests/golden tests/protocol tests/tools hil/tests/test_rig.py hil/tests/test_rig_profiles.py
@@ -187,9 +188,12 @@ done
 side_by_side "pytest (no CAN)" no_can_pytest "pmactl unit tests (python-can virtual bus, no CAN)" pmactl_unit_tests
 stage "HIL acceptance offline (the paper's Cases 1-3, MFAC, PID, load change, constraint, faults; libpma_offline.so)" \
   .venv/bin/python -m pytest -q hil/tests/test_acceptance.py
-stage "rig variants offline (Case 3 on rigs the set was not tuned on: no fault, the guarantee or its flagged loss, about MFAC's error)" \
-  .venv/bin/python -m pytest -q hil/tests/test_rig_variants.py
-side_by_side "hil/with-vcan" with_vcan_tests "fuzz (libFuzzer on the CAN frame handler, ASan + UBSan, 60 s)" fuzz_60s
+# the fuzz run is bounded by time: beside the variants it costs them a little CPU, not its minute
+side_by_side "rig variants offline (Case 3 on rigs the set was not tuned on: no fault, the guarantee or its flagged loss, about MFAC's error)" \
+  rig_variants "fuzz (libFuzzer on the CAN frame handler, ASan + UBSan, 60 s)" fuzz_60s
+# not side by side: its SIGINT test needs a shell whose background jobs may receive SIGINT (a
+# background lane starts with SIGINT ignored, and then so does everything it runs)
+stage "hil/with-vcan" bash hil/tests/test_with_vcan.sh
 side_by_side "vcan: integration tests (pma-fw-host, python-can, can-utils, pmactl), HIL CAN-only checks" \
   vcan_integration "vcan: main job quick, offline == over CAN, tuning session, benchmark" vcan_hil
 if ((FAILED_STAGES > 0)); then
