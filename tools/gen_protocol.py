@@ -295,15 +295,21 @@ def gen_enum_ties() -> str:
            "/* Each value of the DBC's VAL_ tables is the firmware's constant of that name\n",
            " * (tools/gen_protocol.py ENUM_TIES). Include after the headers that define them\n",
            " * (app.h, supervisor.h, params.h, pma/status.h, pma/hal.h) and pma_proto.h. */\n"]
+    # one block per value table: signals that share a table (COMMAND.Command and
+    # COMMAND_ACK.Command, ...) are listed together, and a table that differs between
+    # them gets a block of its own (which then fails to compile)
+    blocks: dict[tuple[str, tuple[tuple[int, str], ...]], list[str]] = {}
     for (message, signal), prefix in ENUM_TIES.items():
         sig = db.get_message_by_name(message).get_signal_by_name(signal)
         if not sig.choices:
             raise TableError(f"{message}.{signal} has no VAL_ table to tie to {prefix}*")
-        out.append(f"\n/* {message}.{signal} */\n")
-        for value, label in sorted(sig.choices.items()):
-            c_name = C_NAME_EXCEPTIONS.get((prefix, str(label)), prefix + str(label))
-            out.append(f"_Static_assert({c_name} == {int(value)}, "
-                       f"\"{message}.{signal} {label} is {int(value)} in the DBC\");\n")
+        table = tuple(sorted((int(v), str(label)) for v, label in sig.choices.items()))
+        blocks.setdefault((prefix, table), []).append(f"{message}.{signal}")
+    for (prefix, table), signals in blocks.items():
+        out.append(f"\n/* {', '.join(signals)} */\n")
+        for value, label in table:
+            c_name = C_NAME_EXCEPTIONS.get((prefix, label), prefix + label)
+            out.append(f"_Static_assert({c_name} == {value}, \"{signals[0]} {label} is {value} in the DBC\");\n")
     out.append("\n#endif /* PMA_PROTO_TIES_H */\n")
     return "".join(out)
 

@@ -63,27 +63,27 @@ class Graph:
 
 
 @dataclass
-class Path_:
+class CallPath:
     bytes: int
     chain: list[str]
 
 
-def deepest(g: Graph, root: str, unknown: set[str], recursive: set[str]) -> Path_:
-    memo: dict[str, Path_] = {}
+def deepest(g: Graph, root: str, unknown: set[str], recursive: set[str]) -> CallPath:
+    memo: dict[str, CallPath] = {}
     active: set[str] = set()
 
-    def walk(fn: str) -> Path_:
+    def walk(fn: str) -> CallPath:
         if fn in memo:
             return memo[fn]
         if fn in active:
             recursive.add(fn)
-            return Path_(0, [fn])
+            return CallPath(0, [fn])
         active.add(fn)
         own = g.frame.get(fn)
         if own is None:
             unknown.add(fn)
             own = 0
-        best = Path_(0, [])
+        best = CallPath(0, [])
         for callee in sorted(g.calls.get(fn, ())):
             if callee.startswith("__indirect_call"):
                 unknown.add(f"{fn} -> (a call through a pointer)")
@@ -92,7 +92,7 @@ def deepest(g: Graph, root: str, unknown: set[str], recursive: set[str]) -> Path
             if p.bytes > best.bytes:
                 best = p
         active.discard(fn)
-        memo[fn] = Path_(own + best.bytes, [fn] + best.chain)
+        memo[fn] = CallPath(own + best.bytes, [fn] + best.chain)
         return memo[fn]
 
     return walk(root)
@@ -118,7 +118,7 @@ def resolve(g: Graph, name: str) -> str | None:
     return found[0] if len(found) == 1 else None
 
 
-def show(g: Graph, p: Path_) -> str:
+def show(g: Graph, p: CallPath) -> str:
     return "\n".join(f"    {g.frame.get(f, 0):5d} B  {f.rsplit(':', 1)[-1]}  {_short(g.where.get(f, ''))}".rstrip()
                      for f in p.chain)
 

@@ -11,7 +11,6 @@
  *     length: dropped (counted), as if never received;
  *   - out-of-range or malformed values: answered with the error (COMMAND,
  *     PARAM_REQ) or dropped (SETPOINT), nothing changes. */
-#include <math.h>
 #include <string.h>
 
 #include "app_core.h"
@@ -248,15 +247,11 @@ static void on_param_req(pma_app_t *app, const pma_can_frame_t *f)
         break;
     }
     case PMA_PARAM_OP_SAVE:
-        rc = pma_app_params_save(app);
-        type = (pma_param_type_t)req_type;
-        break;
     case PMA_PARAM_OP_RESTORE_DEFAULTS:
-        rc = pma_app_params_restore_defaults(app);
-        type = (pma_param_type_t)req_type;
-        break;
-    case PMA_PARAM_OP_LOAD:
-        rc = pma_app_params_load(app);
+    case PMA_PARAM_OP_LOAD: /* the whole set; the reply echoes the request's Type */
+        rc = op == PMA_PARAM_OP_SAVE ? pma_app_params_save(app)
+             : op == PMA_PARAM_OP_LOAD ? pma_app_params_load(app)
+                                       : pma_app_params_restore_defaults(app);
         type = (pma_param_type_t)req_type;
         break;
     case PMA_PARAM_OP_GET_MIN:

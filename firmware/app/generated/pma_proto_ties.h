@@ -7,7 +7,7 @@
  * (tools/gen_protocol.py ENUM_TIES). Include after the headers that define them
  * (app.h, supervisor.h, params.h, pma/status.h, pma/hal.h) and pma_proto.h. */
 
-/* COMMAND.Command */
+/* COMMAND.Command, COMMAND_ACK.Command */
 _Static_assert(PMA_CMD_ARM == 1, "COMMAND.Command ARM is 1 in the DBC");
 _Static_assert(PMA_CMD_DISARM == 2, "COMMAND.Command DISARM is 2 in the DBC");
 _Static_assert(PMA_CMD_START == 3, "COMMAND.Command START is 3 in the DBC");
@@ -18,25 +18,14 @@ _Static_assert(PMA_CMD_SELECT_CONTROLLER == 7, "COMMAND.Command SELECT_CONTROLLE
 _Static_assert(PMA_CMD_SELECT_REFERENCE == 8, "COMMAND.Command SELECT_REFERENCE is 8 in the DBC");
 _Static_assert(PMA_CMD_RESTART == 9, "COMMAND.Command RESTART is 9 in the DBC");
 
-/* COMMAND_ACK.Command */
-_Static_assert(PMA_CMD_ARM == 1, "COMMAND_ACK.Command ARM is 1 in the DBC");
-_Static_assert(PMA_CMD_DISARM == 2, "COMMAND_ACK.Command DISARM is 2 in the DBC");
-_Static_assert(PMA_CMD_START == 3, "COMMAND_ACK.Command START is 3 in the DBC");
-_Static_assert(PMA_CMD_STOP == 4, "COMMAND_ACK.Command STOP is 4 in the DBC");
-_Static_assert(PMA_CMD_ESTOP == 5, "COMMAND_ACK.Command ESTOP is 5 in the DBC");
-_Static_assert(PMA_CMD_CLEAR_FAULTS == 6, "COMMAND_ACK.Command CLEAR_FAULTS is 6 in the DBC");
-_Static_assert(PMA_CMD_SELECT_CONTROLLER == 7, "COMMAND_ACK.Command SELECT_CONTROLLER is 7 in the DBC");
-_Static_assert(PMA_CMD_SELECT_REFERENCE == 8, "COMMAND_ACK.Command SELECT_REFERENCE is 8 in the DBC");
-_Static_assert(PMA_CMD_RESTART == 9, "COMMAND_ACK.Command RESTART is 9 in the DBC");
-
-/* COMMAND_ACK.State */
+/* COMMAND_ACK.State, HEARTBEAT.State */
 _Static_assert(PMA_STATE_BOOT == 0, "COMMAND_ACK.State BOOT is 0 in the DBC");
 _Static_assert(PMA_STATE_IDLE == 1, "COMMAND_ACK.State IDLE is 1 in the DBC");
 _Static_assert(PMA_STATE_ARMED == 2, "COMMAND_ACK.State ARMED is 2 in the DBC");
 _Static_assert(PMA_STATE_RUNNING == 3, "COMMAND_ACK.State RUNNING is 3 in the DBC");
 _Static_assert(PMA_STATE_FAULT == 4, "COMMAND_ACK.State FAULT is 4 in the DBC");
 
-/* COMMAND_ACK.Result */
+/* COMMAND_ACK.Result, PARAM_RESP.Result */
 _Static_assert(PMA_ERR_FAULT == -23, "COMMAND_ACK.Result FAULT is -23 in the DBC");
 _Static_assert(PMA_ERR_LENGTH == -22, "COMMAND_ACK.Result LENGTH is -22 in the DBC");
 _Static_assert(PMA_ERR_UNKNOWN_COMMAND == -21, "COMMAND_ACK.Result UNKNOWN_COMMAND is -21 in the DBC");
@@ -62,7 +51,7 @@ _Static_assert(PMA_ERR_NOT_FINITE == -2, "COMMAND_ACK.Result NOT_FINITE is -2 in
 _Static_assert(PMA_ERR_NULL == -1, "COMMAND_ACK.Result NULL is -1 in the DBC");
 _Static_assert(PMA_OK == 0, "COMMAND_ACK.Result OK is 0 in the DBC");
 
-/* PARAM_REQ.Op */
+/* PARAM_REQ.Op, PARAM_RESP.Op */
 _Static_assert(PMA_PARAM_OP_GET == 0, "PARAM_REQ.Op GET is 0 in the DBC");
 _Static_assert(PMA_PARAM_OP_SET == 1, "PARAM_REQ.Op SET is 1 in the DBC");
 _Static_assert(PMA_PARAM_OP_SAVE == 2, "PARAM_REQ.Op SAVE is 2 in the DBC");
@@ -74,66 +63,16 @@ _Static_assert(PMA_PARAM_OP_NEXT_ID == 7, "PARAM_REQ.Op NEXT_ID is 7 in the DBC"
 _Static_assert(PMA_PARAM_OP_LOAD == 8, "PARAM_REQ.Op LOAD is 8 in the DBC");
 _Static_assert(PMA_PARAM_OP_GET_STATUS == 9, "PARAM_REQ.Op GET_STATUS is 9 in the DBC");
 
-/* PARAM_REQ.Type */
+/* PARAM_REQ.Type, PARAM_RESP.Type */
 _Static_assert(PMA_PARAM_F32 == 0, "PARAM_REQ.Type F32 is 0 in the DBC");
 _Static_assert(PMA_PARAM_U32 == 1, "PARAM_REQ.Type U32 is 1 in the DBC");
 _Static_assert(PMA_PARAM_I32 == 2, "PARAM_REQ.Type I32 is 2 in the DBC");
-
-/* PARAM_RESP.Op */
-_Static_assert(PMA_PARAM_OP_GET == 0, "PARAM_RESP.Op GET is 0 in the DBC");
-_Static_assert(PMA_PARAM_OP_SET == 1, "PARAM_RESP.Op SET is 1 in the DBC");
-_Static_assert(PMA_PARAM_OP_SAVE == 2, "PARAM_RESP.Op SAVE is 2 in the DBC");
-_Static_assert(PMA_PARAM_OP_RESTORE_DEFAULTS == 3, "PARAM_RESP.Op RESTORE_DEFAULTS is 3 in the DBC");
-_Static_assert(PMA_PARAM_OP_GET_MIN == 4, "PARAM_RESP.Op GET_MIN is 4 in the DBC");
-_Static_assert(PMA_PARAM_OP_GET_MAX == 5, "PARAM_RESP.Op GET_MAX is 5 in the DBC");
-_Static_assert(PMA_PARAM_OP_GET_DEFAULT == 6, "PARAM_RESP.Op GET_DEFAULT is 6 in the DBC");
-_Static_assert(PMA_PARAM_OP_NEXT_ID == 7, "PARAM_RESP.Op NEXT_ID is 7 in the DBC");
-_Static_assert(PMA_PARAM_OP_LOAD == 8, "PARAM_RESP.Op LOAD is 8 in the DBC");
-_Static_assert(PMA_PARAM_OP_GET_STATUS == 9, "PARAM_RESP.Op GET_STATUS is 9 in the DBC");
-
-/* PARAM_RESP.Type */
-_Static_assert(PMA_PARAM_F32 == 0, "PARAM_RESP.Type F32 is 0 in the DBC");
-_Static_assert(PMA_PARAM_U32 == 1, "PARAM_RESP.Type U32 is 1 in the DBC");
-_Static_assert(PMA_PARAM_I32 == 2, "PARAM_RESP.Type I32 is 2 in the DBC");
-
-/* PARAM_RESP.Result */
-_Static_assert(PMA_ERR_FAULT == -23, "PARAM_RESP.Result FAULT is -23 in the DBC");
-_Static_assert(PMA_ERR_LENGTH == -22, "PARAM_RESP.Result LENGTH is -22 in the DBC");
-_Static_assert(PMA_ERR_UNKNOWN_COMMAND == -21, "PARAM_RESP.Result UNKNOWN_COMMAND is -21 in the DBC");
-_Static_assert(PMA_ERR_STATE == -20, "PARAM_RESP.Result STATE is -20 in the DBC");
-_Static_assert(PMA_ERR_TYPE == -19, "PARAM_RESP.Result TYPE is -19 in the DBC");
-_Static_assert(PMA_ERR_UNKNOWN_ID == -18, "PARAM_RESP.Result UNKNOWN_ID is -18 in the DBC");
-_Static_assert(PMA_ERR_CORRUPT == -17, "PARAM_RESP.Result CORRUPT is -17 in the DBC");
-_Static_assert(PMA_ERR_VERIFY == -16, "PARAM_RESP.Result VERIFY is -16 in the DBC");
-_Static_assert(PMA_ERR_NO_RECORD == -15, "PARAM_RESP.Result NO_RECORD is -15 in the DBC");
-_Static_assert(PMA_ERR_WIRE_BREAK == -14, "PARAM_RESP.Result WIRE_BREAK is -14 in the DBC");
-_Static_assert(PMA_ERR_NOT_ERASED == -13, "PARAM_RESP.Result NOT_ERASED is -13 in the DBC");
-_Static_assert(PMA_ERR_IO == -12, "PARAM_RESP.Result IO is -12 in the DBC");
-_Static_assert(PMA_ERR_BUS_OFF == -11, "PARAM_RESP.Result BUS_OFF is -11 in the DBC");
-_Static_assert(PMA_ERR_FULL == -10, "PARAM_RESP.Result FULL is -10 in the DBC");
-_Static_assert(PMA_ERR_EMPTY == -9, "PARAM_RESP.Result EMPTY is -9 in the DBC");
-_Static_assert(PMA_ERR_NOT_IMPLEMENTED == -8, "PARAM_RESP.Result NOT_IMPLEMENTED is -8 in the DBC");
-_Static_assert(PMA_ERR_FIXED_RANGE == -7, "PARAM_RESP.Result FIXED_RANGE is -7 in the DBC");
-_Static_assert(PMA_ERR_UNSUPPORTED == -6, "PARAM_RESP.Result UNSUPPORTED is -6 in the DBC");
-_Static_assert(PMA_ERR_NOT_READY == -5, "PARAM_RESP.Result NOT_READY is -5 in the DBC");
-_Static_assert(PMA_ERR_BAND == -4, "PARAM_RESP.Result BAND is -4 in the DBC");
-_Static_assert(PMA_ERR_RANGE == -3, "PARAM_RESP.Result RANGE is -3 in the DBC");
-_Static_assert(PMA_ERR_NOT_FINITE == -2, "PARAM_RESP.Result NOT_FINITE is -2 in the DBC");
-_Static_assert(PMA_ERR_NULL == -1, "PARAM_RESP.Result NULL is -1 in the DBC");
-_Static_assert(PMA_OK == 0, "PARAM_RESP.Result OK is 0 in the DBC");
 
 /* PLANT_ACTUATOR.Sample */
 _Static_assert(PMA_SAMPLE_NEW == 0, "PLANT_ACTUATOR.Sample NEW is 0 in the DBC");
 _Static_assert(PMA_SAMPLE_REPEATED == 1, "PLANT_ACTUATOR.Sample REPEATED is 1 in the DBC");
 _Static_assert(PMA_SAMPLE_GAP == 2, "PLANT_ACTUATOR.Sample GAP is 2 in the DBC");
 _Static_assert(PMA_SAMPLE_NONE == 3, "PLANT_ACTUATOR.Sample NONE is 3 in the DBC");
-
-/* HEARTBEAT.State */
-_Static_assert(PMA_STATE_BOOT == 0, "HEARTBEAT.State BOOT is 0 in the DBC");
-_Static_assert(PMA_STATE_IDLE == 1, "HEARTBEAT.State IDLE is 1 in the DBC");
-_Static_assert(PMA_STATE_ARMED == 2, "HEARTBEAT.State ARMED is 2 in the DBC");
-_Static_assert(PMA_STATE_RUNNING == 3, "HEARTBEAT.State RUNNING is 3 in the DBC");
-_Static_assert(PMA_STATE_FAULT == 4, "HEARTBEAT.State FAULT is 4 in the DBC");
 
 /* HEARTBEAT.FaultCode */
 _Static_assert(PMA_FAULT_NONE == 0, "HEARTBEAT.FaultCode NONE is 0 in the DBC");

@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Choosing and opening a python-can bus, the protocol's constants of the client, and the
-receive filters of a node's frames: one way for pmactl and the HIL harness.
-"""
+"""Choosing and opening a python-can bus, and the receive filters of a node's frames: one way
+for pmactl and the HIL harness."""
+from __future__ import annotations
 
 from typing import Any, Iterable
 
@@ -11,15 +11,8 @@ from pmactl import adapters
 from pmactl.errors import InterfaceError
 from pmactl.protocol import BASE_ID_MASK, BROADCASTS, Protocol
 
-TYPE_CODES = {"f32": 0, "u32": 1, "i32": 2}
-TYPE_SIGNALS = {0: "ValueF32", 1: "ValueU32", 2: "ValueI32"}
-TYPE_NAMES = {v: k for k, v in TYPE_CODES.items()}
-OPS = {"GET": 0, "SET": 1, "SAVE": 2, "RESTORE_DEFAULTS": 3, "GET_MIN": 4, "GET_MAX": 5,
-       "GET_DEFAULT": 6, "NEXT_ID": 7, "LOAD": 8}
-
 DEFAULT_INTERFACE = "socketcan"
 DEFAULT_CHANNEL = "vcan0"           # only when the interface is socketcan
-HOST_HEARTBEAT_PERIOD_S = 0.1       # 10 Hz, well inside the default safety.host_timeout_ms (500 ms)
 
 
 # ---------------------------------------------------------------- the bus --

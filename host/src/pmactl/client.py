@@ -23,12 +23,7 @@ from __future__ import annotations
 from pmactl.bus import (
     DEFAULT_CHANNEL,
     DEFAULT_INTERFACE,
-    HOST_HEARTBEAT_PERIOD_S,
     NODE_REPLIES,
-    OPS,
-    TYPE_CODES,
-    TYPE_NAMES,
-    TYPE_SIGNALS,
     bus_config,
     describe_bus,
     frame_filters,
@@ -48,6 +43,11 @@ from pmactl.monitor import (
     scan,
 )
 from pmactl.node import (
+    HOST_HEARTBEAT_PERIOD_S,
+    OPS,
+    TYPE_CODES,
+    TYPE_NAMES,
+    TYPE_SIGNALS,
     Ack,
     FrameListener,
     LoadReport,
@@ -59,7 +59,6 @@ from pmactl.node import (
     param_value_text,
 )
 from pmactl.recorder import (
-    _TELEM_SIGNALS,
     RecordProgress,
     RecordSummary,
     TelemetryGrouper,
@@ -98,7 +97,6 @@ __all__ = [
     "TelemetryGrouper",
     "TelemetryRecorder",
     "TelemetryRow",
-    "_TELEM_SIGNALS",
     "bus_config",
     "describe_bus",
     "frame_filters",

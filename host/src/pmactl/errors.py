@@ -1,8 +1,7 @@
 # SPDX-License-Identifier: Apache-2.0
 """The protocol client's errors (pmactl.client re-exports them).
 """
-
-
+from __future__ import annotations
 
 from pmactl.protocol import Param
 

@@ -1,12 +1,12 @@
 # SPDX-License-Identifier: Apache-2.0
 """Finding the nodes on a bus (scan) and watching it (BusMonitor).
 """
+from __future__ import annotations
 
 import time
 from dataclasses import dataclass
 
-from pmactl.bus import OPS
-from pmactl.node import PmaNode, Status
+from pmactl.node import OPS, PmaNode, Status
 
 
 # -------------------------------------------------------------------- scan --

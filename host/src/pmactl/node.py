@@ -2,6 +2,7 @@
 """PmaNode: the synchronous client of one node (commands, parameters, status), and its
 replies.
 """
+from __future__ import annotations
 
 import math
 import time
@@ -10,9 +11,18 @@ from typing import Any, Callable, Iterable
 
 import can
 
-from pmactl.bus import OPS, TYPE_CODES, TYPE_SIGNALS, frame_filters
+from pmactl.bus import frame_filters
 from pmactl.errors import CommandError, NoReply, PmaError, SetRejected
 from pmactl.protocol import Param, Protocol, load_protocol
+
+# PARAM_REQ's Type and Op values, by name
+TYPE_CODES = {"f32": 0, "u32": 1, "i32": 2}
+TYPE_SIGNALS = {0: "ValueF32", 1: "ValueU32", 2: "ValueI32"}
+TYPE_NAMES = {v: k for k, v in TYPE_CODES.items()}
+OPS = {"GET": 0, "SET": 1, "SAVE": 2, "RESTORE_DEFAULTS": 3, "GET_MIN": 4, "GET_MAX": 5,
+       "GET_DEFAULT": 6, "NEXT_ID": 7, "LOAD": 8}
+
+HOST_HEARTBEAT_PERIOD_S = 0.1       # 10 Hz, well inside the default safety.host_timeout_ms (500 ms)
 
 
 # ----------------------------------------------------------------- replies --
@@ -238,8 +248,7 @@ class PmaNode:
         parameter changes are lost). Returns the first heartbeat after its start-up (BOOT),
         once it is out of BOOT; NoReply if it does not come back within timeout_s."""
         self.command("RESTART")
-        boot = {v: k for k, v in self.proto.state_names.items()}["BOOT"]
-        self.wait_for("HEARTBEAT", lambda s: s["State"] == boot, timeout_s=timeout_s)
+        boot = self.wait_state("BOOT", timeout_s=timeout_s).state
         sig = self.wait_for("HEARTBEAT", lambda s: s["State"] != boot, timeout_s=timeout_s)
         return Status.from_signals(self.proto, self.node, sig)
 

@@ -1,6 +1,7 @@
 # SPDX-License-Identifier: Apache-2.0
 """Grouping telemetry into rows and recording it (TelemetryGrouper, TelemetryRecorder).
 """
+from __future__ import annotations
 
 import copy
 import csv
@@ -12,9 +13,9 @@ from typing import Any, Callable
 
 import can
 
-from pmactl.bus import HOST_HEARTBEAT_PERIOD_S, NODE_REPLIES
+from pmactl.bus import NODE_REPLIES
 from pmactl.errors import NodeStateError, NoReply, PmaError
-from pmactl.node import PmaNode, Status
+from pmactl.node import HOST_HEARTBEAT_PERIOD_S, PmaNode, Status
 from pmactl.protocol import TELEM_FRAMES, to_f32
 from pmactl.recording import COLUMNS, header_row, row_cells
 
