@@ -481,7 +481,7 @@ def _assignments(items: list[str] | None, what: str) -> list[tuple[str, str]]:
 
 
 def _set_nested(d: dict[str, Any], path: str, value: Any) -> dict[str, Any]:
-    out = json.loads(json.dumps(d))        # a deep copy of plain TOML data
+    out: dict[str, Any] = json.loads(json.dumps(d))        # a deep copy of plain TOML data
     cur = out
     parts = path.split(".")
     for p in parts[:-1]:

@@ -14,16 +14,12 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 from typing import Any
 
 import numpy as np
 
-if __package__ in (None, ""):
-    sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-
-from hil.rig import Rig, RigParams  # noqa: E402
-from hil.rig_params import calibrate_mas10  # noqa: E402
+from hil.rig import Rig, RigParams
+from hil.rig_params import calibrate_mas10
 
 STEPS_KPA = (25, 50, 100, -50, -100)
 T_PRE, T_POST, DT = 0.1, 1.5, 0.001
@@ -57,7 +53,8 @@ def step_metrics(t: np.ndarray, y: np.ndarray, y0: float) -> dict[str, float]:
     r = (y - y0) / d
     after = t >= 0
     tt, rr = t[after], r[after]
-    first = lambda cond: float(tt[np.argmax(cond)]) if np.any(cond) else float("nan")  # noqa: E731
+    def first(cond: np.ndarray) -> float:
+        return float(tt[np.argmax(cond)]) if np.any(cond) else float("nan")
     outside = np.nonzero(np.abs(rr - 1.0) > 0.05)[0]
     return {
         "final": float(d),

@@ -15,15 +15,11 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 from typing import Any
 
 import numpy as np
 
-if __package__ in (None, ""):
-    sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-
-from hil.rig_figures import (  # noqa: E402
+from hil.rig_figures import (
     DMSP10_POINTS,
     MAS10_POINTS,
     TablePoints,
@@ -33,7 +29,7 @@ from hil.rig_figures import (  # noqa: E402
     staircase_loop,
     table,
 )
-from hil.rig_params import RigParams  # noqa: E402
+from hil.rig_params import RigParams
 
 PROFILES: list[tuple[str, TablePoints]] = [("nominal", MAS10_POINTS), ("dmsp10", DMSP10_POINTS),
                                            ("mas10-itv2050", MAS10_POINTS)]

@@ -75,7 +75,8 @@ def _end(summary: dict[str, Any], label: str) -> str:
 
 def _table(head: list[str], rows: list[list[str]]) -> str:
     widths = [max(len(str(r[i])) for r in [head, *rows]) for i in range(len(head))]
-    line = lambda r: "| " + " | ".join(str(v).ljust(w) for v, w in zip(r, widths)) + " |"  # noqa: E731
+    def line(r: list[str]) -> str:
+        return "| " + " | ".join(str(v).ljust(w) for v, w in zip(r, widths)) + " |"
     sep = "|" + "|".join("-" * (w + 2) for w in widths) + "|"
     return "\n".join([line(head), sep] + [line(r) for r in rows])
 

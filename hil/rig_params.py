@@ -70,7 +70,7 @@ SOURCES: dict[str, Any] = {
 
 def _serres_k(p_kpa: float) -> float:
     a, b = SOURCES["serres_k_low"] if p_kpa < SOURCES["serres_k_break_kpa"] else SOURCES["serres_k_high"]
-    return a - b * p_kpa
+    return float(a - b * p_kpa)
 
 
 def calibrate_mas10() -> dict[str, float]:
@@ -126,7 +126,7 @@ def _hyst_force_default() -> float:
 
     stroke_mm = f(600.0) / k(600.0)
     width_mm = SOURCES["hyst_source_loop_width_frac_of_stroke_at_300kpa"] * stroke_mm
-    return width_mm * k(300.0) / 2.0 / (1.0 - math.exp(-f(300.0) / HYST_RAMP_N))
+    return float(width_mm * k(300.0) / 2.0 / (1.0 - math.exp(-f(300.0) / HYST_RAMP_N)))
 
 
 # ---------------------------------------------------------------------------
@@ -304,7 +304,7 @@ class RigParams:
             from .rig_profiles import profile_dict  # here: rig_profiles imports this module
 
             data = _merge_tables(profile_dict(str(name)), data)
-        params = _from_dict(cls, data, "rig")
+        params: RigParams = _from_dict(cls, data, "rig")
         params.validate()
         return params
 

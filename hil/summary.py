@@ -214,7 +214,7 @@ def static_pressure_for(sc: Scenario) -> Callable[[np.ndarray], np.ndarray]:
     order = np.argsort(x)
 
     def f(xq: np.ndarray) -> np.ndarray:
-        out = np.interp(xq, x[order], p[order])
+        out: np.ndarray = np.interp(xq, x[order], p[order])
         out[(xq < x.min()) | (xq > x.max())] = math.nan
         return out
     return f

@@ -32,9 +32,8 @@ from pathlib import Path
 import can
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the repository's hil package
-from hil.fw_process import FirmwareProcess  # noqa: E402
-from pmactl import PmaNode, load_protocol  # noqa: E402
+from hil.fw_process import FirmwareProcess
+from pmactl import PmaNode, load_protocol
 
 
 def pct(a: np.ndarray) -> str:

@@ -47,7 +47,6 @@ import argparse
 import csv
 import json
 import os
-import sys
 import time
 import urllib.request
 from pathlib import Path
@@ -55,12 +54,11 @@ from typing import Any, Callable
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+from hil.rig import Rig
+from hil.rig_figures import DMSP10_POINTS, quiet, table
+from hil.rig_params import RigParams
 
-from hil.rig import Rig  # noqa: E402
-from hil.rig_figures import DMSP10_POINTS, quiet, table  # noqa: E402
-from hil.rig_params import RigParams  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 REPO = "tbazina/pam_lqi_pid"
 COMMIT = "6f0ae4db9ec1b855a89ea0b54be39bdf6c1d044d"

@@ -5,7 +5,7 @@
     python tools/plot_docs.py --out docs/img
 
 The controllers come from tests/golden/pma_reference.py (the double-precision
-reference of the firmware's algorithms), imported via sys.path. The plant used
+reference of the firmware's algorithms), imported as pma_golden.pma_reference. The plant used
 for the closed-loop figure is a small RK4 model of the paper's eq. 7 with the
 coefficients of tests/unit/test_closed_loop.c: test code for an illustration,
 not a measurement and not part of the firmware.
@@ -33,8 +33,7 @@ from matplotlib.figure import Figure  # noqa: E402
 from numpy.typing import NDArray  # noqa: E402
 
 REPO = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(REPO / "tests" / "golden"))
-import pma_reference as pref  # noqa: E402
+from pma_golden import pma_reference as pref  # noqa: E402
 
 FloatArray = NDArray[np.float64]
 

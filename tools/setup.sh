@@ -47,13 +47,17 @@ if [[ ! -x $VENV/bin/python ]]; then
   say "creating Python virtual environment $VENV"
   python3 -m venv "$VENV"
 fi
-if ! "$VENV/bin/python" -c "import numpy, pytest, matplotlib, can, cantools, pmactl" 2>/dev/null ||
+if ! "$VENV/bin/python" -c "import numpy, pytest, matplotlib, can, cantools, pmactl, hil, pma_golden, pma_tools" \
+       2>/dev/null ||
    [[ $ROOT/tools/requirements.txt -nt $VENV/.pma-requirements-stamp ]] ||
-   [[ $ROOT/host/pyproject.toml -nt $VENV/.pma-requirements-stamp ]]; then
+   [[ $ROOT/host/pyproject.toml -nt $VENV/.pma-requirements-stamp ]] ||
+   [[ $ROOT/pyproject.toml -nt $VENV/.pma-requirements-stamp ]]; then
   say "installing Python packages (tools/requirements.txt)"
   "$VENV/bin/pip" install -q --upgrade pip
   "$VENV/bin/pip" install -q -r "$ROOT/tools/requirements.txt"
   "$VENV/bin/pip" install -q -e "$ROOT/host"   # the project's protocol client (pmactl)
+  # the development packages (hil, pma_golden, pma_tools: pyproject.toml), after pmactl
+  "$VENV/bin/pip" install -q -e "$ROOT"
   touch "$VENV/.pma-requirements-stamp"
 else
   say "Python packages present"

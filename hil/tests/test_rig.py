@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 import pathlib
 import tomllib
+from typing import Any
 
 import numpy as np
 import pytest
@@ -138,8 +139,9 @@ def test_paper_band_reachability_in_cm():
     assert rig.p_cmd_for_x_cm(-1.0) is not None
     assert rig.p_cmd_for_x_cm(-2.0) is None
     low = Rig(quiet(p0_kpa=60.0))
-    p_for = [low.p_cmd_for_x_cm(x) for x in (-1.5, -2.0, -2.5)]
-    assert all(p is not None for p in p_for)
+    maybe = [low.p_cmd_for_x_cm(x) for x in (-1.5, -2.0, -2.5)]
+    p_for = [p for p in maybe if p is not None]
+    assert len(p_for) == len(maybe)
     assert 400 < p_for[0] < p_for[1] < p_for[2] <= 900
 
 
@@ -149,7 +151,7 @@ def test_long_random_input_stays_finite_and_bounded():
     rig = Rig(RigParams(), seed=3)
     t_next = 0.0
     counts = rig.kpa_to_dac(300.0)
-    xs, ps, cs = [], [], []
+    xs, ps_l, cs_l = [], [], []
     for k in range(15000):
         if rig.time_s >= t_next:
             counts = int(rng.choice([0, 4095, int(rng.integers(0, 4096))], p=[0.1, 0.1, 0.8]))
@@ -164,13 +166,13 @@ def test_long_random_input_stays_finite_and_bounded():
         rig.apply_dac(counts)
         rig.step(DT)
         xs.append(rig.x_cm)
-        ps.append(rig.p_kpa)
-        cs.append(rig.contraction_mm)
+        ps_l.append(rig.p_kpa)
+        cs_l.append(rig.contraction_mm)
         rig.sensor_counts()
-    xs, ps, cs = np.array(xs), np.array(ps), np.array(cs)
-    assert np.all(np.isfinite(xs)) and np.all(np.isfinite(ps))
+    xs_a, ps, cs = np.array(xs), np.array(ps_l), np.array(cs_l)
+    assert np.all(np.isfinite(xs_a)) and np.all(np.isfinite(ps))
     assert ps.min() >= -1e-9 and ps.max() <= 900.0 + 1e-9
-    assert np.allclose(cs, rig.x0_contraction_mm - 10.0 * xs)  # the paper's sign: contraction -> x < 0
+    assert np.allclose(cs, rig.x0_contraction_mm - 10.0 * xs_a)  # the paper's sign: contraction -> x < 0
     # physically possible lengths: from stretched by 8 kg + 60 N to about 26 % contraction
     lo_mm = -(8.0 * 9.81 + 60.0) / min(rig._k_of_p(p) for p in (0.0, 300.0, 900.0)) - 0.5
     assert cs.min() > lo_mm
@@ -217,12 +219,12 @@ def test_regulator_dead_time_and_lag_from_a_step():
     rig.apply_dac(rig.kpa_to_dac(400.0))  # 1820 counts = 400 kPa
     p_i, p_f = rig.p_kpa, rig.p_cmd_kpa
     t0 = rig.time_s
-    ts, pr = [], []
+    ts_l, pr_l = [], []
     for _ in range(2000):
         rig.step(1e-4)
-        ts.append(rig.time_s - t0)
-        pr.append(rig.p_kpa)
-    ts, pr = np.array(ts), np.array(pr)
+        ts_l.append(rig.time_s - t0)
+        pr_l.append(rig.p_kpa)
+    ts, pr = np.array(ts_l), np.array(pr_l)
     frac = (pr - p_i) / (p_f - p_i)
     # dead time: nothing moves before it
     assert np.all(np.abs(frac[ts < r.dead_time_s - 1e-9]) < 1e-12)
@@ -409,10 +411,11 @@ def test_determinism_with_a_seed():
 
 
 def test_params_from_dict_round_trip_and_errors():
-    d = {"p0_kpa": 250, "muscle": {"hyst_force_n": 0, "hyst_delta_mm": [0.2, 0.4]}, "load": {"mass_kg": 3}}
+    muscle: dict[str, Any] = {"hyst_force_n": 0, "hyst_delta_mm": [0.2, 0.4]}
+    d = {"p0_kpa": 250, "muscle": muscle, "load": {"mass_kg": 3}}
     with pytest.raises(ValueError):
         RigParams.from_dict(d)  # two deltas but four weights
-    d["muscle"]["hyst_weights"] = [0.5, 0.5]
+    muscle["hyst_weights"] = [0.5, 0.5]
     p = RigParams.from_dict(d)
     p.validate()
     assert p.p0_kpa == 250.0 and p.load.mass_kg == 3.0 and p.muscle.hyst_delta_mm == (0.2, 0.4)

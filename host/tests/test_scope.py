@@ -158,8 +158,7 @@ def _in_a_window(cwd: Path, *args: str) -> subprocess.CompletedProcess[str]:
     try:
         assert xvfb.stdout is not None
         display = f":{xvfb.stdout.readline().strip()}"
-        env = dict(os.environ, DISPLAY=display, MPLBACKEND="TkAgg",
-                   PYTHONPATH=os.pathsep.join([str(HERE)] + sys.path))
+        env = dict(os.environ, DISPLAY=display, MPLBACKEND="TkAgg")   # the script's folder: its imports
         r = subprocess.run([sys.executable, str(HERE / "scope_window.py"), *args],
                            env=env, capture_output=True, text=True, timeout=300, check=False, cwd=cwd)
         assert r.returncode == EXIT_OK, r.stdout + r.stderr

@@ -20,11 +20,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
+from pma_golden import gen_vectors
+from pma_golden import pma_reference as ref
 
-import gen_vectors  # noqa: E402
-import pma_reference as ref  # noqa: E402
+HERE = Path(__file__).resolve().parent
 
 CASE3 = ref.PpcConfig(a_cm_s=2.0, c=2.0, w1_cm=0.2, w2_cm_s=0.5, t_u_s=2.0,
                       u_min=-400.0, u_max=400.0)

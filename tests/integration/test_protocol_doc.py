@@ -3,7 +3,7 @@
 (cansend, candump) as the client against pma-fw-host, produce the frames the
 document shows, and every cell of its state-transition table is what the
 firmware answers. The conventions of the examples are in the document
-(section "Examples are tests") and in tests/protocol/doc_examples.py, which
+(section "Examples are tests") and in tools/protocol_doc.py, which
 parses them; tests/protocol checks the document against the DBC without CAN.
 
     hil/with-vcan .venv/bin/python -m pytest tests/integration -k protocol_doc
@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import shutil
 import subprocess
-import sys
 import threading
 import time
 from pathlib import Path
@@ -20,9 +19,9 @@ from pathlib import Path
 import cantools
 import pytest
 
+from pma_tools import protocol_doc as dx
+
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "tests/protocol"))
-import doc_examples as dx  # noqa: E402
 
 NODE = 3
 CHANNEL = "vcan0"

@@ -3,30 +3,19 @@
 table in docs/protocol.md being its current output. No CAN needed."""
 from __future__ import annotations
 
-import importlib.util
 import random
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
-from doc_examples import DOC, read_doc, section
+
+from pma_tools import busload
+from pma_tools.protocol_doc import DOC, read_doc, section
 
 ROOT = Path(__file__).resolve().parents[2]
 BUSLOAD = ROOT / "tools/busload.py"
 BEGIN, END = "<!-- busload:begin -->", "<!-- busload:end -->"
-
-
-def _load():
-    spec = importlib.util.spec_from_file_location("busload", BUSLOAD)
-    assert spec and spec.loader
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules["busload"] = mod
-    spec.loader.exec_module(mod)
-    return mod
-
-
-busload = _load()
 
 
 # ------------------------------------------------------------ bit formula --

@@ -8,8 +8,9 @@ from __future__ import annotations
 import re
 
 import cantools
-import doc_examples as dx
 import pytest
+
+from pma_tools import protocol_doc as dx
 
 ROOT = dx.ROOT
 APP_H = ROOT / "firmware/app/app.h"

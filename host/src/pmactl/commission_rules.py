@@ -298,7 +298,8 @@ def derive(m: Measured, task: Task) -> Derivation:
     wc = margins["crossover_rad_s"] if math.isfinite(margins["crossover_rad_s"]) else 1.0 / (tau_c + theta_eff)
     fc_hz = min(max(FC_PER_CROSSOVER * wc / (2.0 * math.pi), 2.0), 50.0)
 
-    u_of = lambda p: polarity * (p - p0) / m.kpa_per_u
+    def u_of(p_kpa: float) -> float:
+        return polarity * (p_kpa - p0) / m.kpa_per_u
     u_lo, u_hi = sorted((u_of(m.p_min_kpa), u_of(m.p_max_kpa)))
     u_start = u_of(m.static_map.hold_kpa(x_start))
     phi1 = mfac_phi1(ki * m.period_s)

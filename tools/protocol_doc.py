@@ -1,9 +1,9 @@
 # SPDX-License-Identifier: Apache-2.0
 """Reads docs/protocol.md for the tests: its runnable examples, its tables.
 
-Used by tests/protocol (no CAN) and tests/integration/test_protocol_doc.py
-(runs the examples against pma-fw-host). The conventions are described in the
-document itself, section "Examples are tests":
+Imported as pma_tools.protocol_doc by tests/protocol (no CAN) and
+tests/integration/test_protocol_doc.py (runs the examples against pma-fw-host). The
+conventions are described in the document itself, section "Examples are tests":
 
   - every ```console block is a runnable example;
   - `$ cansend IFACE ID#DATA` lines are sent; the lines that follow are the
@@ -20,7 +20,7 @@ import shlex
 from dataclasses import dataclass, field
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[1]
 DOC = ROOT / "docs/protocol.md"
 DBC = ROOT / "firmware/protocol/pma_proto.dbc"
 
