@@ -6,11 +6,10 @@
 #
 # Builds tests/fuzz/fuzz_frames.c with clang-14 and libFuzzer under ASan + UBSan
 # (-fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all -std=c11 -Wall -Wextra -Werror
-# -g -O1) into build/fuzz/ (its own CMake project, tests/fuzz/CMakeLists.txt; the presets are
-# untouched), writes the seed corpus and dictionary from the DBC (tests/fuzz/make_corpus.py),
+# -g -O1) with the preset fuzz into build/fuzz/ (tests/fuzz/CMakeLists.txt), writes the seed corpus and dictionary from the DBC (tests/fuzz/make_corpus.py),
 # runs the fuzzer for SECONDS, prints executions per second and coverage, and exits non-zero on
 # any crash, leak, sanitizer report, invariant violation or timeout. A failing input is saved
-# as build/fuzz/artifacts/crash-<sha1> (reproduce: build/fuzz/fuzz_frames <file>).
+# as build/fuzz/artifacts/crash-<sha1> (reproduce: build/fuzz/tests/fuzz/fuzz_frames <file>).
 #
 # Environment:
 #   PMA_FUZZ_DEFINES  extra definitions for the harness, e.g. PMA_FUZZ_TRACE (prints every
@@ -39,13 +38,17 @@ if ! command -v "$CC_FUZZ" >/dev/null; then
   exit 1
 fi
 
-OUT=build/fuzz
-say "building $OUT/fuzz_frames with $CC_FUZZ"
+OUT=build/fuzz    # the preset fuzz's binary directory
+FUZZER=$OUT/tests/fuzz/fuzz_frames
+say "building $FUZZER with $CC_FUZZ (preset fuzz)"
+# a build/fuzz configured from tests/fuzz alone (before the preset) cannot be reused
+if [[ -f $OUT/CMakeCache.txt ]] && ! grep -qx "CMAKE_HOME_DIRECTORY:INTERNAL=$ROOT" "$OUT/CMakeCache.txt"; then
+  rm -rf "$OUT"
+fi
 mkdir -p "$OUT"
-cmake -S tests/fuzz -B "$OUT" -G Ninja -DCMAKE_C_COMPILER="$CC_FUZZ" \
-  -DPMA_FUZZ_DEFINES="${PMA_FUZZ_DEFINES:-}" >"$OUT/configure.log" 2>&1 ||
-  { cat "$OUT/configure.log" >&2; exit 1; }
-cmake --build "$OUT" --target fuzz_frames
+cmake --preset fuzz -DCMAKE_C_COMPILER="$CC_FUZZ" -DPMA_FUZZ_DEFINES="${PMA_FUZZ_DEFINES:-}" \
+  >"$OUT/configure.log" 2>&1 || { cat "$OUT/configure.log" >&2; exit 1; }
+cmake --build --preset fuzz
 
 SEEDS=$OUT/seed
 CORPUS=$OUT/corpus
@@ -61,7 +64,7 @@ if [[ ${PMA_FUZZ_NO_REPLAY:-0} != 1 ]]; then
   replay_failed=0
   for f in tests/fuzz/crashes/*; do
     [[ -f $f && $f != *.md ]] || continue
-    if "$OUT/fuzz_frames" "$f" >"$OUT/replay.log" 2>&1; then
+    if "$FUZZER" "$f" >"$OUT/replay.log" 2>&1; then
       say "replay $f: passes"
     else
       replay_failed=1
@@ -83,7 +86,7 @@ say "fuzzing for ${SECONDS_TO_RUN} s (log: $LOG)"
 # Run from $OUT: with -jobs libFuzzer writes its fuzz-<n>.log files into the current directory.
 # shellcheck disable=SC2086
 set +e
-(cd "$OUT" && ./fuzz_frames "$ROOT/$CORPUS" "$ROOT/$SEEDS" \
+(cd "$OUT" && "$ROOT/$FUZZER" "$ROOT/$CORPUS" "$ROOT/$SEEDS" \
   -dict="$ROOT/$OUT/frames.dict" \
   -max_total_time="$SECONDS_TO_RUN" \
   -timeout=10 -rss_limit_mb=2048 -max_len=4801 \
@@ -107,7 +110,7 @@ if ((status != 0)); then
   echo "fuzz: FAILED (libFuzzer exit status $status); the report:" >&2
   grep -E 'INVARIANT|ERROR: |runtime error|SUMMARY|Test unit written|at record|^    #[0-9]+ ' "$LOG" |
     head -n 40 >&2 || true
-  echo "fuzz: replay with: $OUT/fuzz_frames $ARTIFACTS/<file>  (full log: $LOG)" >&2
+  echo "fuzz: replay with: $FUZZER $ARTIFACTS/<file>  (full log: $LOG)" >&2
   exit 1
 fi
 say "passed: no crash, leak, sanitizer report or invariant violation"

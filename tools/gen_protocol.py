@@ -285,6 +285,15 @@ ENUM_TIES: dict[tuple[str, str], str] = {
 }
 C_NAME_EXCEPTIONS = {("PMA_ERR_", "OK"): "PMA_OK"}
 
+# The parameters whose values (params.toml "values") are a C enum of the firmware's other than
+# the param table's own PMA_<NAME>_<VALUE> macros: parameter -> the prefix of that enum's
+# constants. Each value is tied by a _Static_assert (pma_proto_ties.h) to both.
+PARAM_ENUM_TIES: dict[str, str] = {
+    "ref.kind": "PMA_REF_",            # pma_ref_kind_t (control: pma/ref.h)
+    "vel.kind": "PMA_VELEST_",         # pma_velest_kind_t (control: pma/velest.h)
+    "safety.safe_mode": "PMA_SAFE_",   # pma_safe_mode_t (app: actuator.h)
+}
+
 
 def gen_enum_ties() -> str:
     """_Static_asserts that tie each VAL_ table of ENUM_TIES to the firmware's C constants."""
@@ -294,7 +303,8 @@ def gen_enum_ties() -> str:
            "#ifndef PMA_PROTO_TIES_H\n#define PMA_PROTO_TIES_H\n\n",
            "/* Each value of the DBC's VAL_ tables is the firmware's constant of that name\n",
            " * (tools/gen_protocol.py ENUM_TIES). Include after the headers that define them\n",
-           " * (app.h, supervisor.h, params.h, pma/status.h, pma/hal.h) and pma_proto.h. */\n"]
+           " * (app.h, supervisor.h, params.h, actuator.h, pma/ref.h, pma/velest.h, pma/status.h,\n",
+           " * pma/hal.h) and pma_proto.h. */\n"]
     # one block per value table: signals that share a table (COMMAND.Command and
     # COMMAND_ACK.Command, ...) are listed together, and a table that differs between
     # them gets a block of its own (which then fails to compile)
@@ -310,6 +320,15 @@ def gen_enum_ties() -> str:
         for value, label in table:
             c_name = C_NAME_EXCEPTIONS.get((prefix, label), prefix + label)
             out.append(f"_Static_assert({c_name} == {value}, \"{signals[0]} {label} is {value} in the DBC\");\n")
+    params = {p["name"]: p for p in load_params()}
+    for name, prefix in PARAM_ENUM_TIES.items():
+        if not params.get(name, {}).get("values"):
+            raise TableError(f"parameter {name} has no values to tie to {prefix}*")
+        macro = "PMA_" + params[name]["field"].upper()
+        out.append(f"\n/* parameter {name}: the param table's {macro}_* and the firmware's {prefix}* */\n")
+        for value, label in sorted(params[name]["values"].items()):
+            out.append(f"_Static_assert({prefix}{label} == {value} && {macro}_{label} == {value}u, "
+                       f"\"{name} {label} is {value} in params.toml\");\n")
     out.append("\n#endif /* PMA_PROTO_TIES_H */\n")
     return "".join(out)
 

@@ -44,12 +44,12 @@ int pma_app_bridge_on(const pma_app_t *app)
 void pma_app_sync_bridge(pma_app_t *app)
 {
     const uint8_t on = (uint8_t)pma_app_bridge_on(app);
-    if (on == app->bridge_active) return;
-    app->bridge_active = on;
-    app->bridge_have = app->bridge_new = app->bridge_gap = 0;
-    app->ticks_since_sample = 0;
-    app->sample_status = PMA_SAMPLE_NONE;
-    app->sensor_status = PMA_ERR_NOT_READY;
+    if (on == app->bridge.active) return;
+    app->bridge.active = on;
+    app->bridge.have = app->bridge.fresh = app->bridge.gap = 0;
+    app->sensor.ticks_since_sample = 0;
+    app->sensor.sample_status = PMA_SAMPLE_NONE;
+    app->sensor.status = PMA_ERR_NOT_READY;
 }
 
 static int output_active(const pma_app_t *app)
@@ -169,15 +169,15 @@ int pma_app_apply_timing(pma_app_t *app)
 {
     const uint32_t hz = app->params.sys_tick_hz;
     const uint32_t period_us = (1000000u + hz / 2u) / hz;
-    app->period_s = 1.0f / (float)hz;
+    app->timing.period_s = 1.0f / (float)hz;
     /* the heartbeat period may have changed too (RESTORE_DEFAULTS, LOAD):
      * the next one no later than one new period from now */
     const uint64_t next_hb = pma_hal_time_us() + 1000u * (uint64_t)app->params.sys_heartbeat_ms;
-    if (next_hb < app->next_heartbeat_us) app->next_heartbeat_us = next_hb;
-    if (app->tick_started && period_us == app->period_us) return PMA_OK; /* unchanged: keep it */
-    app->period_us = period_us;
-    int rc = pma_hal_tick_start(app->period_us);
-    app->tick_started = (uint8_t)(rc == PMA_OK);
+    if (next_hb < app->timing.next_heartbeat_us) app->timing.next_heartbeat_us = next_hb;
+    if (app->timing.tick_started && period_us == app->timing.period_us) return PMA_OK; /* unchanged: keep it */
+    app->timing.period_us = period_us;
+    int rc = pma_hal_tick_start(app->timing.period_us);
+    app->timing.tick_started = (uint8_t)(rc == PMA_OK);
     return rc;
 }
 
@@ -186,25 +186,25 @@ int pma_app_apply_timing(pma_app_t *app)
 static void load_params(pma_app_t *app)
 {
     pma_params_defaults(&app->params);
-    app->params_default = 1;
-    app->store_ready = 0;
+    app->storage.params_default = 1;
+    app->storage.ready = 0;
     if (app->plat.store_blocks_per_slot == 0) return;
-    if (pma_pstore_init(&app->store, app->plat.store_first_block,
+    if (pma_pstore_init(&app->storage.pstore, app->plat.store_first_block,
                         app->plat.store_blocks_per_slot) != PMA_OK) {
         return;
     }
-    app->store_ready = 1;
+    app->storage.ready = 1;
     (void)pma_app_load_params(app);
 }
 
 int pma_app_load_params(pma_app_t *app)
 {
-    if (!app->store_ready) return PMA_ERR_NOT_IMPLEMENTED;
+    if (!app->storage.ready) return PMA_ERR_NOT_IMPLEMENTED;
     /* the record's own limit, not this firmware's blob size: a set saved by a
      * firmware with more parameters loads too (unknown ids are skipped) */
     uint8_t blob[PMA_PSTORE_MAX_BLOB_BYTES];
     pma_pstore_info_t info;
-    int rc = pma_pstore_load(&app->store, blob, sizeof blob, &info);
+    int rc = pma_pstore_load(&app->storage.pstore, blob, sizeof blob, &info);
     if (rc != PMA_OK) return rc;
     if (info.blob_version != PMA_PARAMS_BLOB_VERSION) return PMA_ERR_NO_RECORD;
     pma_params_t loaded;
@@ -213,8 +213,8 @@ int pma_app_load_params(pma_app_t *app)
     rc = pma_app_check_param_groups(&loaded);
     if (rc != PMA_OK) return rc; /* an inconsistent stored set: keep what is in RAM */
     app->params = loaded;
-    app->params_default = 0;
-    app->params_changed = 0;
+    app->storage.params_default = 0;
+    app->storage.params_changed = 0;
     return PMA_OK;
 }
 
@@ -223,18 +223,18 @@ int pma_app_core_init(pma_app_t *app, const pma_app_platform_t *plat)
     memset(app, 0, sizeof *app);
     app->plat = *plat;
     app->state = PMA_STATE_BOOT;
-    app->sensor_status = PMA_ERR_NOT_READY;
-    app->sample_status = PMA_SAMPLE_NONE;
+    app->sensor.status = PMA_ERR_NOT_READY;
+    app->sensor.sample_status = PMA_SAMPLE_NONE;
     app->reset_cause = (uint8_t)pma_hal_reset_cause();
     if (plat->watchdog_ms != 0) (void)pma_hal_watchdog_start(plat->watchdog_ms);
 
     load_params(app);
-    app->bridge_active = (uint8_t)pma_app_bridge_on(app);
+    app->bridge.active = (uint8_t)pma_app_bridge_on(app);
     app->node_id = (uint8_t)(plat->node_id >= 0 && plat->node_id <= 15 ? plat->node_id
                                                                         : (int)app->params.sys_node_id);
     pma_actuator_config_t ac;
     actuator_config(&app->params, &ac);
-    app->p_kpa = pma_actuator_safe_kpa(&ac, 0.0f);
+    app->output.p_kpa = pma_actuator_safe_kpa(&ac, 0.0f);
 
     /* this node's ids, and the broadcasts: emergency stop and device-info request */
     const pma_can_filter_t filters[3] = {
@@ -248,7 +248,7 @@ int pma_app_core_init(pma_app_t *app, const pma_app_platform_t *plat)
 int pma_app_core_init_finish(pma_app_t *app, int rc)
 {
     if (rc == PMA_OK) rc = pma_app_apply_timing(app);
-    app->next_heartbeat_us = pma_hal_time_us() + 1000u * (uint64_t)app->params.sys_heartbeat_ms;
+    app->timing.next_heartbeat_us = pma_hal_time_us() + 1000u * (uint64_t)app->params.sys_heartbeat_ms;
     if (rc != PMA_OK) {
         pma_app_raise_fault(app, PMA_FAULT_INIT);
         return rc;
@@ -271,21 +271,21 @@ static int cmd_arm(pma_app_t *app)
     int rc = check_cross_params(app);
     if (rc != PMA_OK) return rc;
     if (pma_app_bridge_on(app) &&
-        app->ticks_since_sample >= app->params.safety_sensor_timeout_ticks) {
+        app->sensor.ticks_since_sample >= app->params.safety_sensor_timeout_ticks) {
         return PMA_ERR_NOT_READY; /* the last sample is too old: the rig is not sending */
     }
-    if (app->sensor_status != PMA_OK) {
+    if (app->sensor.status != PMA_OK) {
         /* never activate the output without a position: no sample yet, or a
          * sensor fault (its code) */
-        return app->sensor_status == PMA_ERR_NOT_READY ? PMA_ERR_NOT_READY : app->sensor_status;
+        return app->sensor.status == PMA_ERR_NOT_READY ? PMA_ERR_NOT_READY : app->sensor.status;
     }
     const pma_params_t *p = &app->params;
-    if (!(app->x_cm >= p->safety_x_min_cm - p->safety_x_margin_cm &&
-          app->x_cm <= p->safety_x_max_cm + p->safety_x_margin_cm)) {
+    if (!(app->sensor.x_cm >= p->safety_x_min_cm - p->safety_x_margin_cm &&
+          app->sensor.x_cm <= p->safety_x_max_cm + p->safety_x_margin_cm)) {
         return PMA_ERR_RANGE;
     }
     app->state = PMA_STATE_ARMED;
-    app->u = 0.0f;
+    app->output.u = 0.0f;
     return PMA_OK;
 }
 
@@ -294,10 +294,10 @@ static int cmd_start(pma_app_t *app)
     if (app->state == PMA_STATE_FAULT) return PMA_ERR_FAULT;
     if (app->state != PMA_STATE_ARMED) return PMA_ERR_STATE;
     int rc = check_cross_params(app);
-    if (rc == PMA_OK) rc = pma_ctrl_start(&app->ctrl, &app->params, app->period_s);
+    if (rc == PMA_OK) rc = pma_ctrl_start(&app->ctrl, &app->params, app->timing.period_s);
     if (rc != PMA_OK) return rc;
-    app->run_ticks = 0;
-    app->ticks_since_host_heartbeat = 0;
+    app->timing.run_ticks = 0;
+    app->timing.ticks_since_host_heartbeat = 0;
     app->telem_count = 0;
     app->state = PMA_STATE_RUNNING;
     return PMA_OK;
@@ -308,7 +308,7 @@ static int select_param(pma_app_t *app, uint16_t id, uint8_t arg)
     pma_param_value_t v;
     v.u32 = arg;
     int rc = pma_param_set(&app->params, id, PMA_PARAM_U32, v, pma_app_phase(app));
-    if (rc == PMA_OK) app->params_changed = 1;
+    if (rc == PMA_OK) app->storage.params_changed = 1;
     return rc;
 }
 
@@ -330,7 +330,7 @@ int pma_app_command(pma_app_t *app, uint8_t command, uint8_t arg)
     case PMA_CMD_STOP:
         if (app->state == PMA_STATE_RUNNING) {
             app->state = PMA_STATE_ARMED;
-            app->u = 0.0f;
+            app->output.u = 0.0f;
             return PMA_OK;
         }
         return app->state == PMA_STATE_ARMED ? PMA_OK
@@ -367,35 +367,35 @@ static void acquire(pma_app_t *app)
 {
     int rc;
     if (pma_app_bridge_on(app)) {
-        if (!app->bridge_have) {
-            app->sample_status = PMA_SAMPLE_NONE;
-            if (app->ticks_since_sample != UINT32_MAX) ++app->ticks_since_sample;
-            app->sensor_status = PMA_ERR_NOT_READY;
+        if (!app->bridge.have) {
+            app->sensor.sample_status = PMA_SAMPLE_NONE;
+            if (app->sensor.ticks_since_sample != UINT32_MAX) ++app->sensor.ticks_since_sample;
+            app->sensor.status = PMA_ERR_NOT_READY;
             return;
         }
-        if (app->bridge_new) {
-            app->sample_status = app->bridge_gap ? PMA_SAMPLE_GAP : PMA_SAMPLE_NEW;
-            app->ticks_since_sample = 0;
+        if (app->bridge.fresh) {
+            app->sensor.sample_status = app->bridge.gap ? PMA_SAMPLE_GAP : PMA_SAMPLE_NEW;
+            app->sensor.ticks_since_sample = 0;
         } else {
-            app->sample_status = PMA_SAMPLE_REPEATED;
-            if (app->ticks_since_sample != UINT32_MAX) ++app->ticks_since_sample;
+            app->sensor.sample_status = PMA_SAMPLE_REPEATED;
+            if (app->sensor.ticks_since_sample != UINT32_MAX) ++app->sensor.ticks_since_sample;
         }
-        app->bridge_new = 0;
-        app->bridge_gap = 0;
-        app->raw_counts = app->bridge_raw;
+        app->bridge.fresh = 0;
+        app->bridge.gap = 0;
+        app->sensor.raw_counts = app->bridge.raw_counts;
         rc = PMA_OK;
     } else {
-        app->ticks_since_sample = 0;
-        rc = pma_hal_adc_read(&app->raw_counts);
+        app->sensor.ticks_since_sample = 0;
+        rc = pma_hal_adc_read(&app->sensor.raw_counts);
     }
     if (rc == PMA_OK) {
         pma_adc_scaling_t s;
         pma_app_adc_scaling(&app->params, &s);
         float x = 0.0f;
-        rc = pma_adc_counts_to_cm(&s, app->raw_counts, &x);
-        if (rc == PMA_OK) app->x_cm = x;
+        rc = pma_adc_counts_to_cm(&s, app->sensor.raw_counts, &x);
+        if (rc == PMA_OK) app->sensor.x_cm = x;
     }
-    app->sensor_status = rc;
+    app->sensor.status = rc;
 }
 
 static void write_output(pma_app_t *app)
@@ -403,39 +403,39 @@ static void write_output(pma_app_t *app)
     pma_actuator_config_t ac;
     actuator_config(&app->params, &ac);
     if (output_active(app)) {
-        app->p_kpa = pma_actuator_active_kpa(&ac, app->u, app->p_kpa, app->period_s);
+        app->output.p_kpa = pma_actuator_active_kpa(&ac, app->output.u, app->output.p_kpa, app->timing.period_s);
     } else {
-        app->p_kpa = pma_actuator_safe_kpa(&ac, app->p_kpa);
+        app->output.p_kpa = pma_actuator_safe_kpa(&ac, app->output.p_kpa);
     }
     pma_dac_scaling_t ds;
     dac_scaling(&app->params, &ds);
-    uint16_t counts = app->dac_counts;
-    if (pma_dac_kpa_to_counts(&ds, app->p_kpa, &counts) == PMA_OK) {
-        app->dac_counts = counts;
+    uint16_t counts = app->output.dac_counts;
+    if (pma_dac_kpa_to_counts(&ds, app->output.p_kpa, &counts) == PMA_OK) {
+        app->output.dac_counts = counts;
     } else {
         /* unreachable while the scaling is enforced at SET (and p is finite):
          * never keep an active pressure on the output */
         pma_app_raise_fault(app, PMA_FAULT_OUTPUT);
-        app->dac_counts = 0;
+        app->output.dac_counts = 0;
     }
     if (pma_app_bridge_on(app)) {
         app->tx_due |= PMA_APP_TX_ACTUATOR; /* the plant bridge's output: a frame */
         return;
     }
-    const int rc = pma_hal_dac_write(app->dac_counts);
+    const int rc = pma_hal_dac_write(app->output.dac_counts);
     if (rc != PMA_OK) {
         /* the DAC refused the value (or failed): never leave an earlier,
          * perhaps active, command on the output. Try the safe value, and if
          * the DAC refuses that too, 0 counts (0 V / 0 mA: a regulator's
          * minimum pressure). */
         pma_app_raise_fault(app, PMA_FAULT_OUTPUT);
-        app->p_kpa = pma_actuator_safe_kpa(&ac, app->p_kpa);
-        if (pma_dac_kpa_to_counts(&ds, app->p_kpa, &counts) != PMA_OK ||
+        app->output.p_kpa = pma_actuator_safe_kpa(&ac, app->output.p_kpa);
+        if (pma_dac_kpa_to_counts(&ds, app->output.p_kpa, &counts) != PMA_OK ||
             pma_hal_dac_write(counts) != PMA_OK) {
             counts = 0;
             (void)pma_hal_dac_write(counts);
         }
-        app->dac_counts = counts;
+        app->output.dac_counts = counts;
     }
 }
 
@@ -449,23 +449,23 @@ static uint32_t ms_to_ticks(uint32_t ms, uint32_t tick_hz)
 void pma_app_core_tick(pma_app_t *app, uint32_t late_ticks)
 {
     pma_app_sync_bridge(app);
-    ++app->ticks;
-    app->late_ticks = late_ticks;
+    ++app->timing.ticks;
+    app->timing.late_ticks = late_ticks;
     acquire(app);
 
     uint8_t ctrl_error = 0;
     if (app->state == PMA_STATE_RUNNING) {
-        if (app->ticks_since_host_heartbeat != UINT32_MAX) ++app->ticks_since_host_heartbeat;
-        if (app->sensor_status == PMA_OK) {
-            const float t_s = (float)app->run_ticks * app->period_s;
+        if (app->timing.ticks_since_host_heartbeat != UINT32_MAX) ++app->timing.ticks_since_host_heartbeat;
+        if (app->sensor.status == PMA_OK) {
+            const float t_s = (float)app->timing.run_ticks * app->timing.period_s;
             float u = 0.0f;
-            ctrl_error = (uint8_t)(pma_ctrl_step(&app->ctrl, t_s, app->x_cm,
+            ctrl_error = (uint8_t)(pma_ctrl_step(&app->ctrl, t_s, app->sensor.x_cm,
                                                  app->params.ctrl_openloop_u, &u) != PMA_OK);
-            app->u = u;
-            ++app->run_ticks;
+            app->output.u = u;
+            ++app->timing.run_ticks;
         }
     } else {
-        app->u = 0.0f;
+        app->output.u = 0.0f;
     }
 
     pma_can_status_t cs;
@@ -483,13 +483,13 @@ void pma_app_core_tick(pma_app_t *app, uint32_t late_ticks)
         .output_active = (uint8_t)output_active(app),
         .running = (uint8_t)(app->state == PMA_STATE_RUNNING),
         .bus_off = bus_off,
-        .sensor_status = app->sensor_status,
-        .x_cm = app->x_cm,
-        .ticks_since_sample = pma_app_bridge_on(app) ? app->ticks_since_sample : 0u,
+        .sensor_status = app->sensor.status,
+        .x_cm = app->sensor.x_cm,
+        .ticks_since_sample = pma_app_bridge_on(app) ? app->sensor.ticks_since_sample : 0u,
         .late_ticks = late_ticks,
-        .ticks_since_host_heartbeat = app->ticks_since_host_heartbeat,
+        .ticks_since_host_heartbeat = app->timing.ticks_since_host_heartbeat,
         .controller_error = ctrl_error,
-        .u = app->u,
+        .u = app->output.u,
         /* the law's clamp run; none once MFAC is in charge (the run that hands over) */
         .barrier_run = app->ctrl.fallback_active ? 0u : app->ctrl.barrier_run,
     };
@@ -517,16 +517,16 @@ void pma_app_core_poll(pma_app_t *app)
          * refused until it has */
         pma_app_raise_fault(app, PMA_FAULT_CAN_BUS_OFF);
         const uint64_t t = pma_hal_time_us();
-        if (t >= app->next_recover_us) { /* at most every PMA_APP_RECOVER_INTERVAL_US */
+        if (t >= app->timing.next_recover_us) { /* at most every PMA_APP_RECOVER_INTERVAL_US */
             (void)pma_hal_can_recover();
-            app->next_recover_us = t + PMA_APP_RECOVER_INTERVAL_US;
+            app->timing.next_recover_us = t + PMA_APP_RECOVER_INTERVAL_US;
         }
     }
     const uint64_t now = pma_hal_time_us();
-    if (now >= app->next_heartbeat_us) {
+    if (now >= app->timing.next_heartbeat_us) {
         app->tx_due |= PMA_APP_TX_HEARTBEAT;
         const uint64_t period = 1000u * (uint64_t)app->params.sys_heartbeat_ms;
-        app->next_heartbeat_us += period;
-        if (app->next_heartbeat_us <= now) app->next_heartbeat_us = now + period;
+        app->timing.next_heartbeat_us += period;
+        if (app->timing.next_heartbeat_us <= now) app->timing.next_heartbeat_us = now + period;
     }
 }

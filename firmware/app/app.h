@@ -186,6 +186,61 @@ typedef struct pma_app_counters {
     uint32_t req_dropped;          /* requests dropped: the queue was full */
 } pma_app_counters_t;
 
+/* The parameter store and how RAM stands against it. */
+typedef struct pma_app_storage {
+    pma_pstore_t pstore;           /* the A/B slots (firmware/storage) */
+    uint8_t ready;                 /* the store is configured (plat.store_blocks_per_slot > 0) */
+    uint8_t params_changed;        /* RAM parameters differ from the saved set (heartbeat flag) */
+    uint8_t params_default;        /* RAM holds the defaults: nothing valid was stored */
+    uint8_t save_failed;           /* the last SAVE failed (the stored set is the one before) */
+} pma_app_storage_t;
+
+/* Time: the tick period and the counters and deadlines that run on it. */
+typedef struct pma_app_timing {
+    uint32_t period_us;            /* tick period, from sys.tick_hz */
+    float period_s;
+    uint64_t ticks;                /* since start-up */
+    uint64_t run_ticks;            /* since START */
+    uint32_t ticks_since_host_heartbeat;
+    uint32_t late_ticks;           /* the late ticks the port reported at the last tick */
+    uint64_t next_heartbeat_us;
+    uint64_t next_recover_us;      /* bus-off: next recovery request */
+    uint8_t heartbeat_counter;
+    uint8_t tick_started;          /* the port's tick runs at period_us */
+} pma_app_timing_t;
+
+/* This tick's position sample, from the ADC or the plant bridge. */
+typedef struct pma_app_sensor {
+    uint16_t raw_counts;
+    int status;                    /* PMA_OK or the conversion's error */
+    float x_cm;
+    uint8_t sample_status;         /* pma_sample_status_t: how this tick's sample came */
+    uint32_t ticks_since_sample;   /* since the last new sample (saturates at UINT32_MAX) */
+} pma_app_sensor_t;
+
+/* The plant bridge's receive side (on: pma_app_bridge_on()). */
+typedef struct pma_app_bridge {
+    uint8_t active;                /* the bridge setting the state below belongs to */
+    uint8_t have;                  /* a PLANT_SENSOR frame has come since the bridge went on */
+    uint8_t fresh;                 /* one has come since the last tick */
+    uint8_t gap;                   /* its sequence number skipped one or more */
+    uint8_t seq;                   /* the last frame's sequence number */
+    uint16_t raw_counts;           /* the last frame's sensor counts */
+} pma_app_bridge_t;
+
+/* What the actuator is driven with. */
+typedef struct pma_app_output {
+    float u;                       /* the controller's output (its own units: kPa about p0) */
+    float p_kpa;                   /* the pressure command */
+    uint16_t dac_counts;           /* and its DAC code */
+} pma_app_output_t;
+
+/* Requests waiting to be handled (a ring), in the order received. */
+typedef struct pma_app_requests {
+    pma_can_frame_t q[PMA_APP_PARAM_REQ_QUEUE];
+    uint8_t head, count;
+} pma_app_requests_t;
+
 typedef struct pma_app {
     pma_app_platform_t plat;
     pma_params_t params;
@@ -195,41 +250,16 @@ typedef struct pma_app {
     uint8_t reset_cause;
     uint8_t restart_pending;       /* RESTART accepted: pma_hal_system_reset() ends this step */
     uint8_t tx_due;                /* PMA_APP_TX_*: what the core's tick and poll have to send */
-    /* storage */
-    pma_pstore_t store;
-    uint8_t store_ready, params_changed, params_default, save_failed;
-    /* time */
-    uint32_t period_us;
-    float period_s;
-    uint64_t ticks;                /* since start-up */
-    uint64_t run_ticks;            /* since START */
-    uint32_t ticks_since_host_heartbeat;
-    uint32_t late_ticks;
-    uint64_t next_heartbeat_us;
-    uint64_t next_recover_us;      /* bus-off: next recovery request */
-    uint8_t heartbeat_counter;
-    uint8_t tick_started;
-    /* sensor */
-    uint16_t raw_counts;
-    int sensor_status;             /* PMA_OK or the conversion's error */
-    float x_cm;
-    /* plant bridge (on: pma_app_bridge_on()) */
-    uint8_t bridge_active;         /* the bridge setting the state below belongs to */
-    uint8_t bridge_have, bridge_new, bridge_gap, bridge_seq, sample_status;
-    uint16_t bridge_raw;
-    uint32_t ticks_since_sample;
-    /* control */
-    pma_ctrl_t ctrl;
-    float u;
-    uint32_t telem_count;
-    /* output */
-    float p_kpa;
-    uint16_t dac_counts;
-    pma_app_counters_t counters;
     uint8_t last_rule;             /* PMA_RULE_* of the last refusal by a rule */
-    /* requests waiting to be handled (a ring), in the order received */
-    pma_can_frame_t req_q[PMA_APP_PARAM_REQ_QUEUE];
-    uint8_t req_q_head, req_q_count;
+    pma_app_storage_t storage;
+    pma_app_timing_t timing;
+    pma_app_sensor_t sensor;
+    pma_app_bridge_t bridge;
+    pma_ctrl_t ctrl;
+    uint32_t telem_count;          /* ticks since the last telemetry frame set */
+    pma_app_output_t output;
+    pma_app_counters_t counters;
+    pma_app_requests_t requests;
 } pma_app_t;
 
 /* Starts the application on an initialised HAL (pma_hal_init() first): BOOT,

@@ -13,6 +13,7 @@
  *     PARAM_REQ) or dropped (SETPOINT), nothing changes. */
 #include <string.h>
 
+#include "actuator.h" /* pma_safe_mode_t, tied to safety.safe_mode below */
 #include "app_core.h"
 #include "app_frames.h"
 #include "generated/pma_proto.h"
@@ -77,14 +78,14 @@ void pma_app_send_heartbeat(pma_app_t *app)
     if (app->state == PMA_STATE_ARMED || app->state == PMA_STATE_RUNNING) flags |= PMA_HB_OUTPUT_ACTIVE;
     if (pma_app_bridge_on(app)) flags |= PMA_HB_PLANT_BRIDGE;
     if (app->plat.lockstep) flags |= PMA_HB_LOCKSTEP;
-    if (app->params_changed) flags |= PMA_HB_PARAMS_CHANGED;
-    if (app->params_default) flags |= PMA_HB_PARAMS_DEFAULT;
-    if (app->save_failed) flags |= PMA_HB_SAVE_FAILED;
+    if (app->storage.params_changed) flags |= PMA_HB_PARAMS_CHANGED;
+    if (app->storage.params_default) flags |= PMA_HB_PARAMS_DEFAULT;
+    if (app->storage.save_failed) flags |= PMA_HB_SAVE_FAILED;
     if (app->ctrl.lost) flags |= PMA_HB_GUARANTEE_LOST;
     if (app->ctrl.fallback_active) flags |= PMA_HB_FALLBACK;
-    if (app->sensor_status == PMA_OK &&
+    if (app->sensor.status == PMA_OK &&
         !(pma_app_bridge_on(app) &&
-          app->ticks_since_sample >= app->params.safety_sensor_timeout_ticks)) {
+          app->sensor.ticks_since_sample >= app->params.safety_sensor_timeout_ticks)) {
         flags |= PMA_HB_SENSOR_VALID;
     }
     if (app->state == PMA_STATE_RUNNING) flags |= PMA_HB_REF_ACTIVE;
@@ -95,7 +96,7 @@ void pma_app_send_heartbeat(pma_app_t *app)
     struct pma_proto_heartbeat_t m = {
         .state = app->state, .fault_code = app->fault, .flags = flags,
         .controller = (uint8_t)app->params.ctrl_mode, .reference = (uint8_t)app->params.ref_kind,
-        .reset_cause = app->reset_cause, .counter = app->heartbeat_counter++,
+        .reset_cause = app->reset_cause, .counter = app->timing.heartbeat_counter++,
     };
     uint8_t d[8] = {0};
     (void)pma_proto_heartbeat_pack(d, &m, sizeof d);
@@ -105,7 +106,7 @@ void pma_app_send_heartbeat(pma_app_t *app)
 int pma_app_send_actuator(pma_app_t *app)
 {
     struct pma_proto_plant_actuator_t m = {
-        .seq = app->bridge_seq, .dac_counts = app->dac_counts, .sample = app->sample_status,
+        .seq = app->bridge.seq, .dac_counts = app->output.dac_counts, .sample = app->sensor.sample_status,
         .output_active = (uint8_t)(app->state == PMA_STATE_ARMED || app->state == PMA_STATE_RUNNING),
     };
     uint8_t d[8] = {0};
@@ -120,9 +121,9 @@ void pma_app_send_telemetry(pma_app_t *app)
     uint8_t d[8];
     if (mask & PMA_TELEM_MASK_A) {
         /* the control time of this step: run_ticks was counted up after it */
-        const uint64_t steps = app->run_ticks > 0 ? app->run_ticks - 1u : 0u;
-        const uint64_t ms = (steps * app->period_us) / 1000u;
-        struct pma_proto_telem_a_t m = {.time_ms = (uint32_t)ms, .x_cm = app->x_cm};
+        const uint64_t steps = app->timing.run_ticks > 0 ? app->timing.run_ticks - 1u : 0u;
+        const uint64_t ms = (steps * app->timing.period_us) / 1000u;
+        struct pma_proto_telem_a_t m = {.time_ms = (uint32_t)ms, .x_cm = app->sensor.x_cm};
         (void)pma_proto_telem_a_pack(d, &m, sizeof d);
         (void)send(app, PMA_PROTO_TELEM_A_FRAME_ID, PMA_PROTO_TELEM_A_LENGTH, d);
     }
@@ -132,7 +133,7 @@ void pma_app_send_telemetry(pma_app_t *app)
         (void)send(app, PMA_PROTO_TELEM_B_FRAME_ID, PMA_PROTO_TELEM_B_LENGTH, d);
     }
     if (mask & PMA_TELEM_MASK_C) {
-        struct pma_proto_telem_c_t m = {.u = app->u, .v_cm_s = o->v_cm_s};
+        struct pma_proto_telem_c_t m = {.u = app->output.u, .v_cm_s = o->v_cm_s};
         (void)pma_proto_telem_c_pack(d, &m, sizeof d);
         (void)send(app, PMA_PROTO_TELEM_C_FRAME_ID, PMA_PROTO_TELEM_C_LENGTH, d);
     }
@@ -143,7 +144,7 @@ void pma_app_send_telemetry(pma_app_t *app)
     }
     if (mask & PMA_TELEM_MASK_E) {
         struct pma_proto_telem_e_t m = {
-            .pressure_kpa = app->p_kpa, .ctrl_flags = (uint16_t)o->flags,
+            .pressure_kpa = app->output.p_kpa, .ctrl_flags = (uint16_t)o->flags,
             .breaches = (uint16_t)(app->ctrl.breaches & 0xFFFFu), /* mod 2^16 (DBC) */
         };
         (void)pma_proto_telem_e_pack(d, &m, sizeof d);
@@ -161,18 +162,18 @@ static void on_plant_sensor(pma_app_t *app, const pma_can_frame_t *f)
         ++app->counters.frames_bad;
         return;
     }
-    if (app->bridge_have && m.seq == app->bridge_seq) {
+    if (app->bridge.have && m.seq == app->bridge.seq) {
         ++app->counters.bridge_repeats; /* a duplicated frame: not a new sample */
         return;
     }
-    if (app->bridge_have && m.seq != (uint8_t)(app->bridge_seq + 1u)) {
+    if (app->bridge.have && m.seq != (uint8_t)(app->bridge.seq + 1u)) {
         ++app->counters.bridge_gaps;
-        app->bridge_gap = 1;
+        app->bridge.gap = 1;
     }
-    app->bridge_have = 1;
-    app->bridge_new = 1;
-    app->bridge_seq = m.seq;
-    app->bridge_raw = m.raw_counts;
+    app->bridge.have = 1;
+    app->bridge.fresh = 1;
+    app->bridge.seq = m.seq;
+    app->bridge.raw_counts = m.raw_counts;
 }
 
 /* DEVICE_INFO_REQ(_ALL): no data; another length is dropped (counted), as for the other
@@ -322,7 +323,7 @@ void pma_app_handle_frame(pma_app_t *app, const pma_can_frame_t *f)
         break;
     case PMA_PROTO_HOST_HEARTBEAT_FRAME_ID:
         if (f->dlc == PMA_PROTO_HOST_HEARTBEAT_LENGTH) {
-            app->ticks_since_host_heartbeat = 0;
+            app->timing.ticks_since_host_heartbeat = 0;
         } else {
             ++app->counters.frames_bad;
         }

@@ -29,7 +29,7 @@ int pma_app_param_set(pma_app_t *app, uint16_t id, pma_param_type_t type, pma_pa
     if (rc == PMA_ERR_RANGE) app->last_rule = (uint8_t)pma_app_param_rule(&trial, 1);
     if (rc != PMA_OK) return rc;
     app->params = trial;
-    app->params_changed = 1;
+    app->storage.params_changed = 1;
     if (id == PMA_PARAM_SYS_TICK_HZ || id == PMA_PARAM_SYS_HEARTBEAT_MS) {
         return pma_app_apply_timing(app); /* the new periods from now on */
     }
@@ -40,12 +40,12 @@ int pma_app_params_save(pma_app_t *app)
 {
     if (app == NULL) return PMA_ERR_NULL;
     if (pma_app_phase(app) != PMA_PHASE_INACTIVE) return PMA_ERR_STATE;
-    if (!app->store_ready) return PMA_ERR_NOT_IMPLEMENTED;
+    if (!app->storage.ready) return PMA_ERR_NOT_IMPLEMENTED;
     uint8_t blob[PMA_PARAMS_BLOB_BYTES];
     const size_t n = pma_params_serialize(&app->params, blob, sizeof blob);
-    const int rc = pma_pstore_save(&app->store, blob, n, PMA_PARAMS_BLOB_VERSION);
-    app->save_failed = (uint8_t)(rc != PMA_OK);
-    if (rc == PMA_OK) app->params_changed = 0;
+    const int rc = pma_pstore_save(&app->storage.pstore, blob, n, PMA_PARAMS_BLOB_VERSION);
+    app->storage.save_failed = (uint8_t)(rc != PMA_OK);
+    if (rc == PMA_OK) app->storage.params_changed = 0;
     return rc;
 }
 
@@ -54,7 +54,7 @@ int pma_app_params_restore_defaults(pma_app_t *app)
     if (app == NULL) return PMA_ERR_NULL;
     if (pma_app_phase(app) != PMA_PHASE_INACTIVE) return PMA_ERR_STATE;
     pma_params_defaults(&app->params);
-    app->params_changed = 1;
+    app->storage.params_changed = 1;
     return pma_app_apply_timing(app);
 }
 
@@ -79,7 +79,7 @@ int pma_app_status_value(const pma_app_t *app, uint16_t id, uint32_t *value)
     case PMA_STATUS_RX_DEFERRED: *value = app->counters.req_deferred; return PMA_OK;
     case PMA_STATUS_RX_DROPPED: *value = app->counters.req_dropped; return PMA_OK;
     case PMA_STATUS_FRAMES_BAD: *value = app->counters.frames_bad; return PMA_OK;
-    case PMA_STATUS_TICKS: *value = (uint32_t)app->ticks; return PMA_OK;
+    case PMA_STATUS_TICKS: *value = (uint32_t)app->timing.ticks; return PMA_OK;
     case PMA_STATUS_FRAMES_RX: *value = app->counters.frames_rx; return PMA_OK;
     case PMA_STATUS_GUARANTEE_LOST_TICKS: *value = app->ctrl.lost_ticks; return PMA_OK;
     case PMA_STATUS_GUARANTEE_LOST_AT_MS:

@@ -49,14 +49,14 @@ static int is_request(const pma_app_t *app, const pma_can_frame_t *f)
 static int evict_param_req(pma_app_t *app, const pma_can_frame_t *f)
 {
     if ((f->id & PMA_BASE_ID_MASK) != PMA_PROTO_COMMAND_FRAME_ID) return 0;
-    for (unsigned k = app->req_q_count; k-- > 0;) {
-        const unsigned at = (app->req_q_head + k) % PMA_APP_PARAM_REQ_QUEUE;
-        if ((app->req_q[at].id & PMA_BASE_ID_MASK) != PMA_PROTO_PARAM_REQ_FRAME_ID) continue;
-        for (unsigned j = k; j + 1u < app->req_q_count; ++j) {
-            app->req_q[(app->req_q_head + j) % PMA_APP_PARAM_REQ_QUEUE] =
-                app->req_q[(app->req_q_head + j + 1u) % PMA_APP_PARAM_REQ_QUEUE];
+    for (unsigned k = app->requests.count; k-- > 0;) {
+        const unsigned at = (app->requests.head + k) % PMA_APP_PARAM_REQ_QUEUE;
+        if ((app->requests.q[at].id & PMA_BASE_ID_MASK) != PMA_PROTO_PARAM_REQ_FRAME_ID) continue;
+        for (unsigned j = k; j + 1u < app->requests.count; ++j) {
+            app->requests.q[(app->requests.head + j) % PMA_APP_PARAM_REQ_QUEUE] =
+                app->requests.q[(app->requests.head + j + 1u) % PMA_APP_PARAM_REQ_QUEUE];
         }
-        --app->req_q_count;
+        --app->requests.count;
         ++app->counters.frames_rx;
         ++app->counters.req_dropped;
         return 1;
@@ -80,13 +80,13 @@ int pma_app_step(pma_app_t *app)
             /* answered later in this iteration, in order, at most
              * PMA_APP_PARAM_REQ_PER_STEP of them: a flood of requests never
              * delays the tick or the frames that feed it */
-            if (app->req_q_count == PMA_APP_PARAM_REQ_QUEUE && !evict_param_req(app, &f)) {
+            if (app->requests.count == PMA_APP_PARAM_REQ_QUEUE && !evict_param_req(app, &f)) {
                 ++app->counters.frames_rx;
                 ++app->counters.req_dropped; /* dropped unanswered */
                 continue;
             }
-            app->req_q[(app->req_q_head + app->req_q_count) % PMA_APP_PARAM_REQ_QUEUE] = f;
-            ++app->req_q_count;
+            app->requests.q[(app->requests.head + app->requests.count) % PMA_APP_PARAM_REQ_QUEUE] = f;
+            ++app->requests.count;
             ++fresh;
             continue;
         }
@@ -95,13 +95,13 @@ int pma_app_step(pma_app_t *app)
          * next sample) wait for the next iteration, which the port grants */
         if (app->plat.lockstep && f.id == sample_id && f.dlc == PMA_PROTO_PLANT_SENSOR_LENGTH) break;
     }
-    for (unsigned n = 0; n < PMA_APP_PARAM_REQ_PER_STEP && app->req_q_count > 0; ++n) {
-        const pma_can_frame_t req = app->req_q[app->req_q_head];
-        app->req_q_head = (uint8_t)((app->req_q_head + 1u) % PMA_APP_PARAM_REQ_QUEUE);
-        --app->req_q_count;
+    for (unsigned n = 0; n < PMA_APP_PARAM_REQ_PER_STEP && app->requests.count > 0; ++n) {
+        const pma_can_frame_t req = app->requests.q[app->requests.head];
+        app->requests.head = (uint8_t)((app->requests.head + 1u) % PMA_APP_PARAM_REQ_QUEUE);
+        --app->requests.count;
         pma_app_handle_frame(app, &req);
     }
-    app->counters.req_deferred += fresh < app->req_q_count ? fresh : app->req_q_count;
+    app->counters.req_deferred += fresh < app->requests.count ? fresh : app->requests.count;
     if (rc == PMA_OK) pma_app_tick(app, late);
     pma_app_poll(app);
     pma_hal_watchdog_kick();

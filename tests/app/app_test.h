@@ -456,7 +456,7 @@ static inline void to_idle(uint8_t bridge)
     if (bridge) send_sample(0, counts_at(-1.5f));
     step();
     assert_state(app.state, PMA_STATE_IDLE);
-    assert_status(app.sensor_status, PMA_OK);
+    assert_status(app.sensor.status, PMA_OK);
 }
 
 /* ARMED, the pressure settled at the preset (slew 20 kPa per tick: 15 ticks). */

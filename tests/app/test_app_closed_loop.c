@@ -195,7 +195,7 @@ static result_t run(uint8_t bridge, uint32_t mode, uint32_t ref, float offset_cm
     assert_state(app.state, PMA_STATE_ARMED);
     assert_near(pl.x, -1.5, 0.05); /* at the preset pressure */
     command_ok(PMA_CMD_START, 0, PMA_OK);
-    plant_advance((double)app.dac_counts / 4.55); /* the START step's tick */
+    plant_advance((double)app.output.dac_counts / 4.55); /* the START step's tick */
 
     result_t r = {0.0, 0.0, pl.x, pl.x, 0};
     const uint32_t n = run_s * 1000u;

@@ -117,7 +117,7 @@ static void run_table(uint8_t bridge)
                 TEST_ASSERT_EQUAL_INT(ref_before, app.params.ref_kind);
             }
             /* a tick later the state holds (nothing faults on its own) */
-            if (bridge) send_sample((uint8_t)(app.bridge_seq + 1u), counts_at(-1.5f));
+            if (bridge) send_sample((uint8_t)(app.bridge.seq + 1u), counts_at(-1.5f));
             cap_clear();
             step();
             assert_state(app.state, e->after[s]);

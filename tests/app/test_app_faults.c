@@ -41,7 +41,7 @@ static uint16_t output_now(void)
 static void expect_fault_this_step(pma_fault_t want)
 {
     TEST_ASSERT_TRUE(app.state == PMA_STATE_ARMED || app.state == PMA_STATE_RUNNING);
-    const uint16_t active = app.dac_counts;
+    const uint16_t active = app.output.dac_counts;
     cap_clear();
     step();
     assert_state(app.state, PMA_STATE_FAULT);
@@ -55,9 +55,9 @@ static void expect_fault_this_step(pma_fault_t want)
  * returns to IDLE (fault 0), and the node can be armed again. */
 static void expect_latched_then_clear(pma_fault_t want, uint8_t bridge)
 {
-    const uint16_t out = app.dac_counts;
+    const uint16_t out = app.output.dac_counts;
     pma_app_raise_fault(&app, PMA_FAULT_ESTOP); /* a later fault does not replace it */
-    uint8_t seq = (uint8_t)(app.bridge_seq + 1u);
+    uint8_t seq = (uint8_t)(app.bridge.seq + 1u);
     for (int i = 0; i < 3; ++i) {
         if (bridge) send_sample(seq++, counts_at(-1.5f));
         cap_clear();
@@ -95,7 +95,7 @@ static void test_sensor_faults_adc(void)
             } else {
                 to_armed(0);
             }
-            TEST_ASSERT_EQUAL_INT(T_P0_COUNTS, app.dac_counts);
+            TEST_ASSERT_EQUAL_INT(T_P0_COUNTS, app.output.dac_counts);
             switch (cases[i].kind) {
             case 0: pma_fake_adc_wire_break(); break;
             case 1: pma_fake_adc_out_of_range(4095); break;  /* the clipped ADC */
@@ -132,13 +132,13 @@ static void test_sensor_timeout_bridge(void)
         } else {
             to_armed(1);
         }
-        send_sample((uint8_t)(app.bridge_seq + 1u), counts_at(-1.5f));
+        send_sample((uint8_t)(app.bridge.seq + 1u), counts_at(-1.5f));
         cap_clear();
         step();
         TEST_ASSERT_EQUAL_INT(PMA_SAMPLE_NEW, last_actuator().sample);
         /* 9 ticks without a new sample (one of them a duplicate): still fine */
         for (int i = 1; i < 10; ++i) {
-            if (i == 5) send_sample(app.bridge_seq, counts_at(-1.5f));
+            if (i == 5) send_sample(app.bridge.seq, counts_at(-1.5f));
             cap_clear();
             step();
             assert_state(app.state, running ? PMA_STATE_RUNNING : PMA_STATE_ARMED);
@@ -147,7 +147,7 @@ static void test_sensor_timeout_bridge(void)
         }
         /* the 10th */
         expect_fault_this_step(PMA_FAULT_SENSOR_TIMEOUT);
-        send_sample((uint8_t)(app.bridge_seq + 1u), counts_at(-1.5f));
+        send_sample((uint8_t)(app.bridge.seq + 1u), counts_at(-1.5f));
         expect_latched_then_clear(PMA_FAULT_SENSOR_TIMEOUT, 1);
     }
     /* while IDLE nothing times out */
@@ -213,12 +213,12 @@ static void test_tick_overrun(void)
     pma_fake_time_advance_us(2u * T_PERIOD_US);
     cap_clear();
     step();
-    TEST_ASSERT_EQUAL_INT(2, app.late_ticks);
+    TEST_ASSERT_EQUAL_INT(2, app.timing.late_ticks);
     assert_state(app.state, PMA_STATE_RUNNING);
     pma_fake_time_advance_us(3u * T_PERIOD_US);
     TEST_ASSERT_EQUAL_INT(PMA_STATE_RUNNING, app.state);
     expect_fault_this_step(PMA_FAULT_TICK_OVERRUN);
-    TEST_ASSERT_EQUAL_INT(3, app.late_ticks);
+    TEST_ASSERT_EQUAL_INT(3, app.timing.late_ticks);
     expect_latched_then_clear(PMA_FAULT_TICK_OVERRUN, 0);
 
     /* given directly to pma_app_tick, in ARMED */
@@ -338,7 +338,7 @@ static void test_barrier(void)
     uint32_t run = 0, t = 0;
     while (app.state == PMA_STATE_RUNNING && t < 3000) {
         if (t % 100 == 0) send_host_heartbeat((uint8_t)t);
-        const uint16_t active = app.dac_counts;
+        const uint16_t active = app.output.dac_counts;
         cap_clear();
         step();
         ++t;
@@ -391,7 +391,7 @@ static void test_barrier_hands_over_to_mfac(void)
     const float t_u_s = app.params.ppc_t_u_s;
     while (t < 3000) {
         if (t % 100 == 0) send_host_heartbeat((uint8_t)t);
-        const float u_before = app.u;
+        const float u_before = app.output.u;
         step();
         ++t;
         assert_state(app.state, PMA_STATE_RUNNING);
@@ -411,7 +411,7 @@ static void test_barrier_hands_over_to_mfac(void)
         }
         TEST_ASSERT_TRUE(o->flags & PMA_CTRL_FLAG_FALLBACK);
         TEST_ASSERT_TRUE(o->flags & PMA_CTRL_FLAG_GUARANTEE_LOST);
-        TEST_ASSERT_TRUE(app.u >= app.params.ctrl_u_min && app.u <= app.params.ctrl_u_max);
+        TEST_ASSERT_TRUE(app.output.u >= app.params.ctrl_u_min && app.output.u <= app.params.ctrl_u_max);
         if (o->t_s >= t_u_s && fabsf(o->e_cm) >= app.params.ppc_w1_cm) ++lost;
     }
     TEST_ASSERT_GREATER_THAN(0u, handover_tick);
@@ -652,7 +652,7 @@ static void test_safe_modes(void)
                 if (bridge) send_sample(s, counts_at(-1.5f));
                 step();
             }
-            TEST_ASSERT_EQUAL_INT(dac_counts_of(340.0f), app.dac_counts);
+            TEST_ASSERT_EQUAL_INT(dac_counts_of(340.0f), app.output.dac_counts);
             /* the fault */
             if (bridge) {
                 send_sample(60, 10);
@@ -664,7 +664,7 @@ static void test_safe_modes(void)
                                   : modes[i].mode == PMA_SAFETY_SAFE_MODE_HOLD
                                       ? dac_counts_of(340.0f)
                                       : dac_counts_of(modes[i].kpa);
-            TEST_ASSERT_EQUAL_INT(want, app.dac_counts);
+            TEST_ASSERT_EQUAL_INT(want, app.output.dac_counts);
             /* held there, not slewed */
             for (uint8_t s = 61; s < 70; ++s) {
                 if (bridge) send_sample(s, counts_at(-1.5f));
@@ -682,7 +682,7 @@ static void test_safe_modes(void)
                 if (bridge) send_sample(s++, counts_at(-1.5f));
                 step();
             }
-            TEST_ASSERT_EQUAL_INT(T_P0_COUNTS, app.dac_counts);
+            TEST_ASSERT_EQUAL_INT(T_P0_COUNTS, app.output.dac_counts);
             pma_can_frame_t f = frame_of(PMA_PROTO_ESTOP_ALL_FRAME_ID, 0, 0, NULL);
             assert_status(pma_fake_can_inject(&f), PMA_OK);
             expect_fault_this_step(PMA_FAULT_ESTOP);
@@ -690,7 +690,7 @@ static void test_safe_modes(void)
                                    : modes[i].mode == PMA_SAFETY_SAFE_MODE_HOLD
                                        ? T_P0_COUNTS
                                        : dac_counts_of(modes[i].kpa);
-            TEST_ASSERT_EQUAL_INT(want2, app.dac_counts);
+            TEST_ASSERT_EQUAL_INT(want2, app.output.dac_counts);
         }
     }
 }

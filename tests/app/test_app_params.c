@@ -248,8 +248,8 @@ static void test_parameter_api_without_frames(void)
     cap_clear();
     pma_param_value_t v = {.u32 = 500};
     assert_status(pma_app_param_set(&app, PMA_PARAM_SYS_TICK_HZ, PMA_PARAM_U32, v), PMA_OK);
-    TEST_ASSERT_EQUAL_UINT32(2000u, app.period_us);            /* the new tick period at once */
-    TEST_ASSERT_EQUAL_INT(1, app.params_changed);
+    TEST_ASSERT_EQUAL_UINT32(2000u, app.timing.period_us);            /* the new tick period at once */
+    TEST_ASSERT_EQUAL_INT(1, app.storage.params_changed);
     pma_param_type_t t = PMA_PARAM_F32;
     pma_param_value_t got = {.u32 = 0};
     assert_status(pma_app_param_get(&app, PMA_PARAM_SYS_TICK_HZ, &t, &got), PMA_OK);
@@ -271,7 +271,7 @@ static void test_parameter_api_without_frames(void)
     /* the whole set: no storage attached here; the defaults back, the timing with them */
     assert_status(pma_app_params_save(&app), PMA_ERR_NOT_IMPLEMENTED);
     assert_status(pma_app_params_restore_defaults(&app), PMA_OK);
-    TEST_ASSERT_EQUAL_UINT32(T_PERIOD_US, app.period_us);
+    TEST_ASSERT_EQUAL_UINT32(T_PERIOD_US, app.timing.period_us);
     drain();
     TEST_ASSERT_EQUAL_INT(0, cap.total);                        /* nothing on the bus */
     /* not while the output is active */

@@ -101,7 +101,7 @@ static void test_param_set_each_type(void)
 static void set_rejected(uint8_t type, uint16_t id, pma_param_value_t v, int want)
 {
     saved_crc = params_crc(&app.params);
-    const uint8_t changed = app.params_changed;
+    const uint8_t changed = app.storage.params_changed;
     const pma_param_desc_t *d = pma_param_find(id);
     pma_param_type_t t;
     pma_param_value_t before;
@@ -114,7 +114,7 @@ static void set_rejected(uint8_t type, uint16_t id, pma_param_value_t v, int wan
                       pma_status_name(r.result), pma_status_name(want));
     }
     TEST_ASSERT_EQUAL_INT(saved_crc, params_crc(&app.params));
-    TEST_ASSERT_EQUAL_INT(changed, app.params_changed);
+    TEST_ASSERT_EQUAL_INT(changed, app.storage.params_changed);
     if (d != NULL) {
         TEST_ASSERT_EQUAL_INT(d->type, r.type);
         TEST_ASSERT_EQUAL_INT(before.u32, r.v.u32);
@@ -148,7 +148,7 @@ static void test_param_set_errors_change_nothing(void)
     set_rejected(PMA_PARAM_U32, PMA_PARAM_CTRL_MODE, vu(5), PMA_ERR_RANGE);
     /* unknown id */
     set_rejected(PMA_PARAM_F32, 6, vf(1.0f), PMA_ERR_UNKNOWN_ID);
-    TEST_ASSERT_EQUAL_INT(0, app.params_changed);
+    TEST_ASSERT_EQUAL_INT(0, app.storage.params_changed);
 
     /* state rules: idle parameters while ARMED and RUNNING, stopped ones while
      * RUNNING; live ones always */
@@ -218,7 +218,7 @@ static void test_param_malformed_requests(void)
         assert_status(r.result, PMA_ERR_UNKNOWN_COMMAND);
     }
     TEST_ASSERT_EQUAL_INT(saved_crc, params_crc(&app.params));
-    TEST_ASSERT_EQUAL_INT(0, app.params_changed);
+    TEST_ASSERT_EQUAL_INT(0, app.storage.params_changed);
     /* the well-formed request works */
     assert_status(param_req(PMA_PARAM_OP_SET, PMA_PARAM_U32, PMA_PARAM_TELEM_MASK, vu(3)).result,
                   PMA_OK);
@@ -234,16 +234,16 @@ static void test_param_whole_set_ops_without_storage(void)
     TEST_ASSERT_EQUAL_INT(0, plat.store_blocks_per_slot);
     set_f32(PMA_PARAM_PPC_C, 7.0f);
     assert_status(whole_op(PMA_PARAM_OP_SAVE), PMA_ERR_NOT_IMPLEMENTED);
-    TEST_ASSERT_EQUAL_INT(0, app.save_failed); /* nothing was attempted */
+    TEST_ASSERT_EQUAL_INT(0, app.storage.save_failed); /* nothing was attempted */
     assert_status(whole_op(PMA_PARAM_OP_LOAD), PMA_ERR_NOT_IMPLEMENTED);
     TEST_ASSERT_TRUE(app.params.ppc_c == 7.0f);
-    TEST_ASSERT_EQUAL_INT(1, app.params_changed);
+    TEST_ASSERT_EQUAL_INT(1, app.storage.params_changed);
     /* RESTORE_DEFAULTS: the table's defaults, in RAM */
     assert_status(whole_op(PMA_PARAM_OP_RESTORE_DEFAULTS), PMA_OK);
     pma_params_t def;
     pma_params_defaults(&def);
     TEST_ASSERT_EQUAL_MEMORY(&def, &app.params, sizeof def);
-    TEST_ASSERT_EQUAL_INT(1, app.params_changed);
+    TEST_ASSERT_EQUAL_INT(1, app.storage.params_changed);
 
     /* refused while the output is active, nothing changes */
     to_armed(0);
@@ -268,7 +268,7 @@ static void test_param_tick_rate(void)
     uint64_t t0 = pma_hal_time_us();
     step();
     TEST_ASSERT_EQUAL_INT(4000u, pma_hal_time_us() - t0);
-    TEST_ASSERT_EQUAL_INT(4000u, app.period_us);
+    TEST_ASSERT_EQUAL_INT(4000u, app.timing.period_us);
     /* RESTORE_DEFAULTS brings back 1 kHz */
     assert_status(whole_op(PMA_PARAM_OP_RESTORE_DEFAULTS), PMA_OK);
     t0 = pma_hal_time_us();
@@ -441,7 +441,7 @@ static void test_telemetry_running_only_decimation_and_mask(void)
     assert_near(ta.x_cm, -1.5f, 0.002);
     assert_near(tb.xr_cm, -1.5f, 1e-6);
     assert_near(tb.e_cm, ta.x_cm - tb.xr_cm, 1e-6);
-    assert_near(te.pressure_kpa, app.p_kpa, 0.0);
+    assert_near(te.pressure_kpa, app.output.p_kpa, 0.0);
     /* 1 s of running: 100 sets */
     cap_clear();
     steps_hb(1000);
@@ -499,7 +499,7 @@ static void test_bridge_sample_status_and_seq(void)
     m = last_actuator();
     TEST_ASSERT_EQUAL_INT(200, m.seq);
     TEST_ASSERT_EQUAL_INT(PMA_SAMPLE_NEW, m.sample);
-    assert_near(app.x_cm, -1.5f, 0.002);
+    assert_near(app.sensor.x_cm, -1.5f, 0.002);
     /* no new sample: REPEATED, same seq */
     cap_clear();
     step();
@@ -513,14 +513,14 @@ static void test_bridge_sample_status_and_seq(void)
     m = last_actuator();
     TEST_ASSERT_EQUAL_INT(201, m.seq);
     TEST_ASSERT_EQUAL_INT(PMA_SAMPLE_NEW, m.sample);
-    assert_near(app.x_cm, -1.0f, 0.002);
+    assert_near(app.sensor.x_cm, -1.0f, 0.002);
     /* a duplicate of 201: not a new sample */
     send_sample(201, counts_at(-2.0f));
     cap_clear();
     step();
     m = last_actuator();
     TEST_ASSERT_EQUAL_INT(PMA_SAMPLE_REPEATED, m.sample);
-    assert_near(app.x_cm, -1.0f, 0.002);
+    assert_near(app.sensor.x_cm, -1.0f, 0.002);
     TEST_ASSERT_EQUAL_INT(1, app.counters.bridge_repeats);
     /* 202 and 203 lost: 204 is NEW after a GAP */
     send_sample(204, counts_at(-2.0f));
@@ -530,7 +530,7 @@ static void test_bridge_sample_status_and_seq(void)
     TEST_ASSERT_EQUAL_INT(204, m.seq);
     TEST_ASSERT_EQUAL_INT(PMA_SAMPLE_GAP, m.sample);
     TEST_ASSERT_EQUAL_INT(1, app.counters.bridge_gaps);
-    assert_near(app.x_cm, -2.0f, 0.002);
+    assert_near(app.sensor.x_cm, -2.0f, 0.002);
     /* wrap-around 255 -> 0 is no gap */
     send_sample(255, counts_at(-2.0f));
     step();
@@ -549,7 +549,7 @@ static void test_bridge_sample_status_and_seq(void)
     m = last_actuator();
     TEST_ASSERT_EQUAL_INT(2, m.seq);
     TEST_ASSERT_EQUAL_INT(PMA_SAMPLE_NEW, m.sample);
-    assert_near(app.x_cm, -2.4f, 0.002);
+    assert_near(app.sensor.x_cm, -2.4f, 0.002);
     /* ARMED: the pressure command goes out in the actuator frame */
     command_ok(PMA_CMD_ARM, 0, PMA_OK);
     for (uint8_t s = 3; s < 30; ++s) {
@@ -559,7 +559,7 @@ static void test_bridge_sample_status_and_seq(void)
         m = last_actuator();
         TEST_ASSERT_EQUAL_INT(s, m.seq);
         TEST_ASSERT_EQUAL_INT(1, m.output_active);
-        TEST_ASSERT_EQUAL_INT(app.dac_counts, m.dac_counts);
+        TEST_ASSERT_EQUAL_INT(app.output.dac_counts, m.dac_counts);
     }
     TEST_ASSERT_EQUAL_INT(T_P0_COUNTS, m.dac_counts);
     TEST_ASSERT_EQUAL_INT(0, pma_fake_dac_write_count());
@@ -587,8 +587,8 @@ static void test_bridge_parameter(void)
     cap_clear();
     step();
     TEST_ASSERT_EQUAL_INT(bad_before + 1u, app.counters.frames_bad);
-    TEST_ASSERT_EQUAL_INT(0, app.bridge_have);
-    assert_near(app.x_cm, -1.5f, 0.002); /* the ADC's position, not the frame's */
+    TEST_ASSERT_EQUAL_INT(0, app.bridge.have);
+    assert_near(app.sensor.x_cm, -1.5f, 0.002); /* the ADC's position, not the frame's */
     TEST_ASSERT_EQUAL_INT(0, sent(PMA_PROTO_PLANT_ACTUATOR_FRAME_ID));
     TEST_ASSERT_EQUAL_INT(0u, dac_now()); /* the DAC is written every tick (safe: 0 kPa) */
     struct pma_proto_heartbeat_t h = next_heartbeat();
@@ -614,7 +614,7 @@ static void test_bridge_parameter(void)
     step();
     struct pma_proto_plant_actuator_t m = last_actuator();
     TEST_ASSERT_EQUAL_INT(PMA_SAMPLE_NONE, m.sample); /* the ADC's sample does not count as one */
-    assert_status(app.sensor_status, PMA_ERR_NOT_READY);
+    assert_status(app.sensor.status, PMA_ERR_NOT_READY);
     command_ok(PMA_CMD_ARM, 0, PMA_ERR_NOT_READY); /* no bridge sample yet */
     send_sample(40, counts_at(-2.0f));
     cap_clear();
@@ -622,7 +622,7 @@ static void test_bridge_parameter(void)
     m = last_actuator();
     TEST_ASSERT_EQUAL_INT(40, m.seq);
     TEST_ASSERT_EQUAL_INT(PMA_SAMPLE_NEW, m.sample);
-    assert_near(app.x_cm, -2.0f, 0.002);
+    assert_near(app.sensor.x_cm, -2.0f, 0.002);
     h = next_heartbeat();
     TEST_ASSERT_TRUE(h.flags & PMA_HB_PLANT_BRIDGE);
     /* ARMED over the bridge: the pressure leaves in frames, the DAC is left alone */
@@ -648,7 +648,7 @@ static void test_bridge_parameter(void)
     send_sample(62, counts_at(-2.5f));
     cap_clear();
     step();
-    assert_near(app.x_cm, -1.0f, 0.002);
+    assert_near(app.sensor.x_cm, -1.0f, 0.002);
     TEST_ASSERT_EQUAL_INT(0, sent(PMA_PROTO_PLANT_ACTUATOR_FRAME_ID));
     TEST_ASSERT_GREATER_THAN(dac_writes, pma_fake_dac_write_count());
 
@@ -685,7 +685,7 @@ static void test_wrong_length_frames_dropped(void)
     step();
     TEST_ASSERT_EQUAL_INT(0, cap.total);
     TEST_ASSERT_EQUAL_INT(1, app.counters.frames_bad);
-    assert_near(app.x_cm, -1.5f, 0.002);
+    assert_near(app.sensor.x_cm, -1.5f, 0.002);
 
     /* HOST_HEARTBEAT of the wrong length does not feed the host timeout */
     to_running(0);

@@ -129,10 +129,10 @@ static void test_was_bug_longer_stored_blob_not_loaded(void)
     assert_status(restart_app(), PMA_OK);
     printf("after restart: ppc.c %g, telem.mask %lu, params_default %u\n",
            (double)app.params.ppc_c, (unsigned long)app.params.telem_mask,
-           app.params_default);
+           app.storage.params_default);
     TEST_ASSERT_TRUE(app.params.ppc_c == 5.0f);
     TEST_ASSERT_EQUAL_INT(7u, app.params.telem_mask);
-    TEST_ASSERT_EQUAL_INT(0, app.params_default);
+    TEST_ASSERT_EQUAL_INT(0, app.storage.params_default);
 }
 
 /* WAS BUG 4: plant bridge: ARM is accepted with a sample far older than

@@ -68,7 +68,7 @@ static bool params_are(const uint32_t *want)
 static void save_ok(void)
 {
     assert_status(whole_op(PMA_PARAM_OP_SAVE), PMA_OK);
-    TEST_ASSERT_EQUAL_INT(0, app.save_failed);
+    TEST_ASSERT_EQUAL_INT(0, app.storage.save_failed);
 }
 
 /* -------------------------------------------------------------------------- */
@@ -77,7 +77,7 @@ static void test_save_then_restart_loads(void)
 {
     defaults = default_crc();
     to_idle(0);
-    TEST_ASSERT_EQUAL_INT(1, app.params_default);
+    TEST_ASSERT_EQUAL_INT(1, app.storage.params_default);
     apply_a(&set_a);
     set_u32(PMA_PARAM_SYS_TICK_HZ, 500);
     set_a = params_crc(&app.params);
@@ -152,7 +152,7 @@ static void test_restart_command(void)
         assert_status(ack.result, want[i]);
         TEST_ASSERT_EQUAL_UINT32(0u, pma_fake_system_reset_requests()); /* not before the step ends */
     }
-    send_sample((uint8_t)(app.bridge_seq + 1u), counts_at(-1.5f));
+    send_sample((uint8_t)(app.bridge.seq + 1u), counts_at(-1.5f));
     step();
     TEST_ASSERT_EQUAL_UINT32(1u, pma_fake_system_reset_requests());
     assert_state(app.state, PMA_STATE_FAULT);       /* the ESTOP; the output stayed safe */
@@ -230,8 +230,8 @@ static void cut_once(int scenario, bool ecc, uint32_t op, uint32_t ops, uint32_t
     const presp_t r = param_req(PMA_PARAM_OP_SAVE, 0, 0, vu(0));
     if (op < ops) {
         assert_status(r.result, PMA_ERR_IO);
-        TEST_ASSERT_EQUAL_INT(1, app.save_failed);
-        TEST_ASSERT_EQUAL_INT(1, app.params_changed);
+        TEST_ASSERT_EQUAL_INT(1, app.storage.save_failed);
+        TEST_ASSERT_EQUAL_INT(1, app.storage.params_changed);
         TEST_ASSERT_TRUE(pma_fake_nvm_power_lost());
     } else {
         assert_status(r.result, PMA_OK);
@@ -325,8 +325,8 @@ static void test_save_refused_active(void)
     command_ok(PMA_CMD_START, 0, PMA_OK);
     assert_status(whole_op(PMA_PARAM_OP_SAVE), PMA_ERR_STATE);
     TEST_ASSERT_EQUAL_INT(ops, pma_fake_nvm_op_count());
-    TEST_ASSERT_EQUAL_INT(1, app.params_changed);
-    TEST_ASSERT_EQUAL_INT(0, app.save_failed);
+    TEST_ASSERT_EQUAL_INT(1, app.storage.params_changed);
+    TEST_ASSERT_EQUAL_INT(0, app.storage.save_failed);
     command_ok(PMA_CMD_DISARM, 0, PMA_OK);
     save_ok();
     TEST_ASSERT_GREATER_THAN(ops, pma_fake_nvm_op_count());
@@ -369,11 +369,11 @@ static void test_load_restores_saved_set(void)
     apply_a(&set_a);
     save_ok();
     apply_b(&set_b);
-    TEST_ASSERT_EQUAL_INT(1, app.params_changed);
+    TEST_ASSERT_EQUAL_INT(1, app.storage.params_changed);
     assert_status(whole_op(PMA_PARAM_OP_LOAD), PMA_OK);
     TEST_ASSERT_TRUE(params_are(&set_a));
-    TEST_ASSERT_EQUAL_INT(0, app.params_changed);
-    TEST_ASSERT_EQUAL_INT(0, app.params_default);
+    TEST_ASSERT_EQUAL_INT(0, app.storage.params_changed);
+    TEST_ASSERT_EQUAL_INT(0, app.storage.params_default);
     /* the loaded timing: heartbeat every 200 ms */
     (void)next_heartbeat();
     const uint64_t t0 = pma_hal_time_us();
@@ -474,7 +474,7 @@ static void test_stored_records_checked(void)
     TEST_ASSERT_TRUE(app.params.ppc_c == 5.0f);
     TEST_ASSERT_EQUAL_INT(7u, app.params.telem_mask);
     TEST_ASSERT_EQUAL_INT(1000u, app.params.sys_tick_hz);
-    TEST_ASSERT_EQUAL_INT(0, app.params_default);
+    TEST_ASSERT_EQUAL_INT(0, app.storage.params_default);
     /* fewer entries (an older firmware's set): the rest are defaults */
     store_blob(&p, 10u * PMA_PARAMS_ENTRY_BYTES, PMA_PARAMS_BLOB_VERSION, PMA_PARAM_COUNT, 0);
     pma_fake_reboot();

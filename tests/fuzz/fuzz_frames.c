@@ -370,8 +370,8 @@ static void take(snap_t *s)
     s->state = w.app.state;
     s->fault = w.app.fault;
     s->params = w.app.params;
-    s->p_kpa = w.app.p_kpa;
-    s->dac_counts = w.app.dac_counts;
+    s->p_kpa = w.app.output.p_kpa;
+    s->dac_counts = w.app.output.dac_counts;
     s->dac_writes = pma_fake_dac_write_count();
     s->counters = w.app.counters;
     pma_can_status_t cs;
@@ -431,9 +431,9 @@ static void check_always(void)
     checked_valid = 1;
     CHECK(a->node_id == w.node);
     const uint32_t hz = a->params.sys_tick_hz;
-    CHECK(a->period_us == (1000000u + hz / 2u) / hz);
-    CHECK(a->tick_started);
-    CHECK(isfinite(a->p_kpa) && a->p_kpa >= 0.0f && a->p_kpa <= 1000.0f);
+    CHECK(a->timing.period_us == (1000000u + hz / 2u) / hz);
+    CHECK(a->timing.tick_started);
+    CHECK(isfinite(a->output.p_kpa) && a->output.p_kpa >= 0.0f && a->output.p_kpa <= 1000.0f);
     if (is_active(a->state)) CHECK(config_armable(&a->params));
 }
 
@@ -442,8 +442,8 @@ static void check_always(void)
 static void check_output_untouched(const snap_t *s)
 {
     CHECK(pma_fake_dac_write_count() == s->dac_writes);
-    CHECK(w.app.p_kpa == s->p_kpa || (isnan(w.app.p_kpa) && isnan(s->p_kpa)));
-    CHECK(w.app.dac_counts == s->dac_counts);
+    CHECK(w.app.output.p_kpa == s->p_kpa || (isnan(w.app.output.p_kpa) && isnan(s->p_kpa)));
+    CHECK(w.app.output.dac_counts == s->dac_counts);
     CHECK(w.tx.actuator == 0);
 }
 
@@ -477,11 +477,11 @@ static void check_command(const snap_t *s, uint8_t cmd, uint8_t arg, int result)
         CHECK(a->state == PMA_STATE_ARMED);
         if (s->state == PMA_STATE_IDLE) {
             const pma_params_t *p = &a->params;
-            CHECK(a->sensor_status == PMA_OK);
-            CHECK(a->x_cm >= p->safety_x_min_cm - p->safety_x_margin_cm &&
-                  a->x_cm <= p->safety_x_max_cm + p->safety_x_margin_cm);
+            CHECK(a->sensor.status == PMA_OK);
+            CHECK(a->sensor.x_cm >= p->safety_x_min_cm - p->safety_x_margin_cm &&
+                  a->sensor.x_cm <= p->safety_x_max_cm + p->safety_x_margin_cm);
             CHECK(config_armable(p) && p->ctrl_u_min < p->ctrl_u_max);
-            if (bridge_on()) CHECK(a->ticks_since_sample < p->safety_sensor_timeout_ticks);
+            if (bridge_on()) CHECK(a->sensor.ticks_since_sample < p->safety_sensor_timeout_ticks);
         }
         break;
     case PMA_CMD_DISARM:
@@ -775,15 +775,15 @@ static void do_tick(uint32_t late)
      * after the supervisor has looked, which the next tick handles) */
     if (s.bus_off) CHECK(a->state == PMA_STATE_FAULT);
     if (is_active(a->state)) {
-        CHECK(a->sensor_status == PMA_OK);
-        CHECK(a->x_cm >= p->safety_x_min_cm - p->safety_x_margin_cm &&
-              a->x_cm <= p->safety_x_max_cm + p->safety_x_margin_cm);
+        CHECK(a->sensor.status == PMA_OK);
+        CHECK(a->sensor.x_cm >= p->safety_x_min_cm - p->safety_x_margin_cm &&
+              a->sensor.x_cm <= p->safety_x_max_cm + p->safety_x_margin_cm);
         CHECK(late <= p->safety_max_late_ticks);
-        if (bridge_on()) CHECK(a->ticks_since_sample < p->safety_sensor_timeout_ticks);
+        if (bridge_on()) CHECK(a->sensor.ticks_since_sample < p->safety_sensor_timeout_ticks);
         if (a->state == PMA_STATE_RUNNING) {
             if (p->safety_host_timeout_ms != 0) {
                 const uint64_t t = ((uint64_t)p->safety_host_timeout_ms * p->sys_tick_hz + 999u) / 1000u;
-                CHECK(a->ticks_since_host_heartbeat < t);
+                CHECK(a->timing.ticks_since_host_heartbeat < t);
             }
             /* the supervisor's clamp run (none once MFAC is in charge: the run hands over) */
             if (p->safety_barrier_ticks != 0 && !a->ctrl.fallback_active) {
@@ -793,7 +793,7 @@ static void do_tick(uint32_t late)
     }
 
     if (is_active(a->state)) {
-        const float prev = s.p_kpa, pk = a->p_kpa;
+        const float prev = s.p_kpa, pk = a->output.p_kpa;
         CHECK(isfinite(pk) && pk >= 0.0f);
         const float lo = fminf(prev, p->act_p_min_kpa), hi = fmaxf(prev, p->act_p_max_kpa);
         CHECK(pk >= lo && pk <= hi);
@@ -802,24 +802,24 @@ static void do_tick(uint32_t late)
             CHECK(fabsf(pk - prev) <= step * (1.0f + 1e-5f) + 1e-4f * fmaxf(1.0f, fabsf(prev)));
         }
         if (a->state == PMA_STATE_ARMED) {
-            CHECK(a->u == 0.0f);
+            CHECK(a->output.u == 0.0f);
         } else {
-            CHECK(isfinite(a->u));
+            CHECK(isfinite(a->output.u));
             if (p->ctrl_mode == PMA_CTRL_MODE_OFF) {
-                CHECK(a->u == 0.0f);
+                CHECK(a->output.u == 0.0f);
             } else {
-                CHECK(a->u >= p->ctrl_u_min && a->u <= p->ctrl_u_max);
+                CHECK(a->output.u >= p->ctrl_u_min && a->output.u <= p->ctrl_u_max);
             }
         }
-        CHECK(near(pk, oracle_active_kpa(p, a->u, prev, period_s)));
+        CHECK(near(pk, oracle_active_kpa(p, a->output.u, prev, period_s)));
         uint16_t c = 0;
         CHECK(oracle_counts(p, pk, &c));
-        CHECK(a->dac_counts == c);
+        CHECK(a->output.dac_counts == c);
         if (bridge_on()) {
             for (uint32_t i = 0; i < w.tx.act_kept; ++i) {
                 CHECK(w.tx.act[i].dac_counts == c && w.tx.act[i].output_active == 1u);
-                CHECK(w.tx.act[i].seq == a->bridge_seq);
-                CHECK(w.tx.act[i].sample == a->sample_status);
+                CHECK(w.tx.act[i].seq == a->bridge.seq);
+                CHECK(w.tx.act[i].sample == a->sensor.sample_status);
             }
             if (w.tx.actuator > 0) w.phys = PHYS_ACTIVE;
         } else {
@@ -833,27 +833,27 @@ static void do_tick(uint32_t late)
         const bool output_fault = s.state != PMA_STATE_FAULT && a->fault == PMA_FAULT_OUTPUT;
         if (output_fault && is_active(s.state)) {
             CHECK(!bridge_on());
-            CHECK(near(a->p_kpa, oracle_safe_kpa(p, oracle_active_kpa(p, a->u, s.p_kpa, period_s))));
+            CHECK(near(a->output.p_kpa, oracle_safe_kpa(p, oracle_active_kpa(p, a->output.u, s.p_kpa, period_s))));
         } else {
-            CHECK(a->p_kpa == oracle_safe_kpa(p, s.p_kpa));
+            CHECK(a->output.p_kpa == oracle_safe_kpa(p, s.p_kpa));
         }
         /* the counts of that pressure; if the DAC refuses them (or they cannot
          * be computed), 0 counts (0 V / 0 mA), in FAULT */
         uint16_t c = 0;
-        const bool convertible = oracle_counts(p, a->p_kpa, &c);
+        const bool convertible = oracle_counts(p, a->output.p_kpa, &c);
         if (convertible) {
-            CHECK(a->dac_counts == c || (a->dac_counts == 0u && a->state == PMA_STATE_FAULT));
+            CHECK(a->output.dac_counts == c || (a->output.dac_counts == 0u && a->state == PMA_STATE_FAULT));
         } else {
-            CHECK(a->dac_counts == 0u && a->state == PMA_STATE_FAULT);
+            CHECK(a->output.dac_counts == 0u && a->state == PMA_STATE_FAULT);
         }
         if (bridge_on()) {
             for (uint32_t i = 0; i < w.tx.act_kept; ++i) {
                 CHECK(w.tx.act[i].output_active == 0u);
-                CHECK(w.tx.act[i].dac_counts == a->dac_counts);
+                CHECK(w.tx.act[i].dac_counts == a->output.dac_counts);
             }
             if (w.tx.actuator > 0) w.phys = PHYS_SAFE;
         } else if (writes == 1u) {
-            CHECK(have_newest && newest.counts == a->dac_counts);
+            CHECK(have_newest && newest.counts == a->output.dac_counts);
             w.phys = PHYS_SAFE;
         } else {
             /* nothing written: only a broken DAC refuses everything, 0 counts
@@ -915,7 +915,7 @@ static void start_app(void)
         CHECK(a->state == PMA_STATE_IDLE && a->fault == PMA_FAULT_NONE);
     }
     w.node = (uint8_t)(w.plat.node_id >= 0 ? (uint32_t)w.plat.node_id : a->params.sys_node_id);
-    CHECK(a->p_kpa == oracle_safe_kpa(&a->params, 0.0f));
+    CHECK(a->output.p_kpa == oracle_safe_kpa(&a->params, 0.0f));
     w.phys = PHYS_SAFE; /* the MCU (re)started: its DAC output was reset */
     reset_tx_seen();
     drain();
@@ -997,7 +997,7 @@ static void op_tick(uint8_t a, uint8_t b, uint8_t c, const uint8_t *d)
     const int32_t base = d[0] | (d[1] << 8);
     const int32_t slope = (int8_t)d[2];
     for (unsigned i = 0; i < n && w.ticks < MAX_TICKS; ++i) {
-        pma_fake_time_advance_us(w.app.period_us);
+        pma_fake_time_advance_us(w.app.timing.period_us);
         pma_hal_watchdog_kick();
         if (c & 1u) {
             int32_t raw = base + (int32_t)i * slope;
@@ -1276,8 +1276,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                 "kPa dac %5u u %g x %g sensor %d ticks %u\n",
                 (unsigned)i, g_op, r[0], r[1], r[2], r[3], r[4],
                 pma_app_state_name(w.app.state), pma_fault_name(w.app.fault),
-                (double)w.app.p_kpa, w.app.dac_counts, (double)w.app.u, (double)w.app.x_cm,
-                w.app.sensor_status, (unsigned)w.ticks);
+                (double)w.app.output.p_kpa, w.app.output.dac_counts, (double)w.app.output.u, (double)w.app.sensor.x_cm,
+                w.app.sensor.status, (unsigned)w.ticks);
 #endif
     }
     return 0;

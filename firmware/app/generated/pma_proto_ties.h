@@ -5,7 +5,8 @@
 
 /* Each value of the DBC's VAL_ tables is the firmware's constant of that name
  * (tools/gen_protocol.py ENUM_TIES). Include after the headers that define them
- * (app.h, supervisor.h, params.h, pma/status.h, pma/hal.h) and pma_proto.h. */
+ * (app.h, supervisor.h, params.h, actuator.h, pma/ref.h, pma/velest.h, pma/status.h,
+ * pma/hal.h) and pma_proto.h. */
 
 /* COMMAND.Command, COMMAND_ACK.Command */
 _Static_assert(PMA_CMD_ARM == 1, "COMMAND.Command ARM is 1 in the DBC");
@@ -115,5 +116,23 @@ _Static_assert(PMA_RESET_WATCHDOG == 2, "HEARTBEAT.ResetCause WATCHDOG is 2 in t
 _Static_assert(PMA_RESET_SOFTWARE == 3, "HEARTBEAT.ResetCause SOFTWARE is 3 in the DBC");
 _Static_assert(PMA_RESET_PIN == 4, "HEARTBEAT.ResetCause PIN is 4 in the DBC");
 _Static_assert(PMA_RESET_BROWNOUT == 5, "HEARTBEAT.ResetCause BROWNOUT is 5 in the DBC");
+
+/* parameter ref.kind: the param table's PMA_REF_KIND_* and the firmware's PMA_REF_* */
+_Static_assert(PMA_REF_HOLD == 0 && PMA_REF_KIND_HOLD == 0u, "ref.kind HOLD is 0 in params.toml");
+_Static_assert(PMA_REF_STEP == 1 && PMA_REF_KIND_STEP == 1u, "ref.kind STEP is 1 in params.toml");
+_Static_assert(PMA_REF_RAMP == 2 && PMA_REF_KIND_RAMP == 2u, "ref.kind RAMP is 2 in params.toml");
+_Static_assert(PMA_REF_SINE == 3 && PMA_REF_KIND_SINE == 3u, "ref.kind SINE is 3 in params.toml");
+_Static_assert(PMA_REF_CASE1 == 4 && PMA_REF_KIND_CASE1 == 4u, "ref.kind CASE1 is 4 in params.toml");
+_Static_assert(PMA_REF_CASE3 == 5 && PMA_REF_KIND_CASE3 == 5u, "ref.kind CASE3 is 5 in params.toml");
+_Static_assert(PMA_REF_STREAM == 6 && PMA_REF_KIND_STREAM == 6u, "ref.kind STREAM is 6 in params.toml");
+
+/* parameter vel.kind: the param table's PMA_VEL_KIND_* and the firmware's PMA_VELEST_* */
+_Static_assert(PMA_VELEST_FILTERED_DIFF == 0 && PMA_VEL_KIND_FILTERED_DIFF == 0u, "vel.kind FILTERED_DIFF is 0 in params.toml");
+_Static_assert(PMA_VELEST_TRACKING == 1 && PMA_VEL_KIND_TRACKING == 1u, "vel.kind TRACKING is 1 in params.toml");
+
+/* parameter safety.safe_mode: the param table's PMA_SAFETY_SAFE_MODE_* and the firmware's PMA_SAFE_* */
+_Static_assert(PMA_SAFE_VENT == 0 && PMA_SAFETY_SAFE_MODE_VENT == 0u, "safety.safe_mode VENT is 0 in params.toml");
+_Static_assert(PMA_SAFE_HOLD == 1 && PMA_SAFETY_SAFE_MODE_HOLD == 1u, "safety.safe_mode HOLD is 1 in params.toml");
+_Static_assert(PMA_SAFE_FIXED == 2 && PMA_SAFETY_SAFE_MODE_FIXED == 2u, "safety.safe_mode FIXED is 2 in params.toml");
 
 #endif /* PMA_PROTO_TIES_H */

@@ -259,7 +259,7 @@ int main(int argc, char **argv)
     }
     fprintf(stderr, "pma-fw-host: node %u on %s, %s, %u Hz, parameters %s%s\n", app.node_id, o.can,
             o.lockstep ? "lockstep" : "real time", (unsigned)app.params.sys_tick_hz,
-            app.params_default ? "defaults" : "loaded from ", app.params_default ? "" : o.storage);
+            app.storage.params_default ? "defaults" : "loaded from ", app.storage.params_default ? "" : o.storage);
 
     uint8_t last_state = app.state, last_fault = app.fault;
     if (o.verbose) fprintf(stderr, "pma-fw-host: state %s\n", pma_app_state_name(app.state));
@@ -277,7 +277,7 @@ int main(int argc, char **argv)
             last_state = app.state;
             last_fault = app.fault;
         }
-        if (o.stall_after >= 0 && app.ticks >= (uint64_t)o.stall_after) {
+        if (o.stall_after >= 0 && app.timing.ticks >= (uint64_t)o.stall_after) {
             fprintf(stderr, "pma-fw-host: stalling the loop (--test-stall-after-ticks)\n");
             for (;;) pause(); /* the watchdog restarts the program */
         }

@@ -365,10 +365,10 @@ int pma_offline_tick(uint16_t raw_counts, pma_offline_tick_t *out)
     }
     out->state = app.state;
     out->fault = app.fault;
-    out->sensor_status = app.sensor_status;
-    out->x_cm = app.x_cm;
-    out->u = app.u;
-    out->p_kpa = app.p_kpa;
+    out->sensor_status = app.sensor.status;
+    out->x_cm = app.sensor.x_cm;
+    out->u = app.output.u;
+    out->p_kpa = app.output.p_kpa;
     out->barrier_run = app.ctrl.barrier_run;
     return actuator ? PMA_OK : PMA_ERR_IO;
 }
@@ -387,7 +387,7 @@ int pma_offline_fault(void)
 
 uint64_t pma_offline_ticks(void)
 {
-    return app.ticks;
+    return app.timing.ticks;
 }
 
 uint64_t pma_offline_time_us(void)
