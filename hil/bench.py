@@ -12,8 +12,12 @@ one control tick) for --seconds of wall time and counts completed steps:
   +codec     the frames encoded and decoded with cantools from the DBC
   +log       and every frame written to the python-can BLF log
   +rig       and the simulated rig stepped by one control period (RK4)
+  raw+telem  the raw loop again with the node RUNNING the runner's scenario: every frame
+             the node sends in a tick is received (PLANT_ACTUATOR, its telemetry and
+             heartbeats), the host heartbeat sent every 100 ticks, as in the runner: the
+             limit of the runner's own traffic
   runner     the HIL runner's own step (hil/runner.py, one lane: also its
-             bookkeeping and telemetry), from a HOLD scenario
+             bookkeeping and telemetry), from the same HOLD scenario
 
 The cost of each addition is the difference of the reciprocal rates (us per step).
 """
@@ -28,14 +32,24 @@ from typing import Any, Callable
 
 import can
 
+from pmactl import PmaNode
+
 from .fw_process import BUILD_HINT, FW_HOST, FirmwareProcess
 from .rig import Rig
 from .rig_params import RigParams
-from .runner import LOCKSTEP_WATCHDOG_MS, REPLY_TIMEOUT_S
+from .runner import LOCKSTEP_WATCHDOG_MS, REPLY_TIMEOUT_S, TIMED_EVERY
 from .scenario import parse, protocol
 
 NODE = 1
 ROUNDS = 5
+HOST_HEARTBEAT_EVERY = 100     # ticks: the runner's HOST_HEARTBEAT every 100 ms at 1 kHz
+# the runner variant's scenario; raw+telem runs the node with the same parameters
+RUN_PARAMS: dict[str, float] = {"act.p0_kpa": 100.0, "act.polarity": -1, "act.p_max_kpa": 900.0,
+                                "ctrl.u_min": -800.0, "ctrl.u_max": 100.0}
+RUN_REFERENCE: dict[str, Any] = {"kind": "HOLD", "offset_cm": -1.0}
+RUN_RIG: dict[str, float] = {"p0_kpa": 60.0, "substep_s": 2.5e-4}
+# each variant's cost is counted against the one it adds to
+ADDED_TO = {"+codec": "raw", "+log": "+codec", "+rig": "+log", "raw+telem": "raw", "runner": "raw+telem"}
 
 
 def _loop(seconds: float, step: Callable[[int], None]) -> float:
@@ -115,6 +129,7 @@ def measure(cfg: dict[str, Any], seconds: float, work: Path) -> dict[str, Any]:
             for name, fn in variants.items():
                 samples[name].append(_loop(seconds / ROUNDS, fn))
         rates = {k: statistics.median(v) for k, v in samples.items()}
+        rates["raw+telem"] = _raw_running_rate(bus, fw, sensor_id, act_id, seconds)
         # the rig alone, outside the bus loop
         t0 = time.perf_counter()
         for _ in range(2000):
@@ -129,20 +144,59 @@ def measure(cfg: dict[str, Any], seconds: float, work: Path) -> dict[str, Any]:
     rates["runner"] = runs[1]["ticks_per_s"]
     split = {k: runs[1][k] / runs[1]["run_ticks"] * 1e6 for k in ("recv_wait_s", "rig_s", "other_s")}
     us = {k: 1e6 / v for k, v in rates.items()}
-    order = list(rates)
     return {"seconds": seconds, "steps_per_s": rates, "us_per_step": us,
-            "added_us_per_step": {b: us[b] - us[a] for a, b in zip(order, order[1:])},
+            "added_us_per_step": {k: us[k] - us[base] for k, base in ADDED_TO.items()},
             "rig_step_us_alone": rig_us, "runner_us_per_step": split,
-            "runner_vs_raw": rates["runner"] / rates["raw"]}
+            "runner_vs_raw": rates["runner"] / rates["raw"],
+            "runner_vs_raw_telem": rates["runner"] / rates["raw+telem"]}
+
+
+def _raw_running_rate(bus: can.BusABC, fw: FirmwareProcess, sensor_id: int, act_id: int,
+                      seconds: float) -> float:
+    """raw+telem: the node RUNNING the runner's scenario (PID holding a position), a prebuilt
+    sample out and every frame of the tick in, python-can only."""
+    bus.set_filters(None)
+    node = PmaNode(bus, NODE, protocol())
+    for key, value in {**RUN_PARAMS, "ref.offset_cm": RUN_REFERENCE["offset_cm"]}.items():
+        node.set(key, value)
+    node.select_controller("PID")
+    node.select_reference(str(RUN_REFERENCE["kind"]))
+    # a sample at the held position: the node measures x = offset, inside its limits
+    counts = Rig(RigParams.from_dict(RUN_RIG), seed=1).sensor_counts()
+    state = {"seq": 0, "hb": 0}
+
+    def step(k: int) -> None:
+        state["seq"] = seq = (state["seq"] + 1) & 0xFF
+        if k % HOST_HEARTBEAT_EVERY == 0:
+            node.host_heartbeat(state["hb"])
+            state["hb"] = (state["hb"] + 1) & 0xFF
+        bus.send(can.Message(arbitration_id=sensor_id, data=bytes([seq, counts & 0xFF, counts >> 8]),
+                             is_extended_id=False))
+        while True:
+            r = bus.recv(REPLY_TIMEOUT_S)
+            if r is None:
+                raise RuntimeError(f"no PLANT_ACTUATOR within {REPLY_TIMEOUT_S:g} s:\n{fw.output()[-2000:]}")
+            if r.arbitration_id == act_id and r.data[0] == seq:
+                return
+
+    for k in range(20):              # the node's sample is this one before ARM
+        step(k)
+    node.arm()
+    step(0)
+    node.start()
+    rate = statistics.median(_loop(seconds / ROUNDS, step) for _ in range(3))
+    status = node.status()
+    if status.state_name != "RUNNING":
+        raise RuntimeError(f"raw+telem: the node left RUNNING ({status.summary()})")
+    node.stop()
+    return rate
 
 
 def _runner_rate(cfg: dict[str, Any], seconds: float, work: Path) -> dict[str, float]:
     from .runner import Runner, RunOptions
     # a 1-lane HOLD run; its length in control time is set so that it lasts about `seconds`
-    sc = parse({"name": "bench", "duration_s": max(1.0, seconds * 0.6), "rig": {"p0_kpa": 60.0, "substep_s": 2.5e-4},
-                "params": {"act.p0_kpa": 100.0, "act.polarity": -1, "act.p_max_kpa": 900.0, "ctrl.u_min": -800.0,
-                           "ctrl.u_max": 100.0},
-                "reference": {"kind": "HOLD", "offset_cm": -1.0},
+    sc = parse({"name": "bench", "duration_s": max(1.0, seconds * 0.6), "rig": dict(RUN_RIG),
+                "params": dict(RUN_PARAMS), "reference": dict(RUN_REFERENCE),
                 "controllers": [{"label": "pid", "mode": "PID"}]})
     summary = Runner(sc, RunOptions(out=work / "runner", bus_config=cfg, progress=False)).run()
     if summary["errors"]:
@@ -159,24 +213,23 @@ def run_bench(cfg: dict[str, Any], seconds: float, out: Path) -> int:
         r = measure(cfg, seconds, Path(tmp))
     print(f"lockstep HIL loop over {cfg.get('interface')} {cfg.get('channel')}, one pma-fw-host node, "
           f"{seconds:g} s per variant")
-    print(f"{'variant':8s} {'steps/s':>9s} {'us/step':>9s} {'added us':>9s}")
-    prev = None
+    print(f"{'variant':9s} {'steps/s':>9s} {'us/step':>9s} {'added us':>9s}  to")
     for k, v in r["steps_per_s"].items():
-        added = "" if prev is None else f"{r['us_per_step'][k] - r['us_per_step'][prev]:9.0f}"
-        print(f"{k:8s} {v:9.0f} {r['us_per_step'][k]:9.0f} {added}")
-        prev = k
+        base = ADDED_TO.get(k)
+        added = "" if base is None else f"{r['added_us_per_step'][k]:9.0f}  {base}"
+        print(f"{k:9s} {v:9.0f} {r['us_per_step'][k]:9.0f} {added}")
     print(f"rig.step(1 ms) alone: {r['rig_step_us_alone']:.0f} us")
     sp = r["runner_us_per_step"]
     print(f"runner step: {sp['recv_wait_s']:.0f} us in bus.recv (the node's tick, its telemetry and heartbeat "
           f"frames, the guest's scheduling), {sp['rig_s']:.0f} us rig + recording, {sp['other_s']:.0f} us the rest "
-          f"(encode, send, decode, log, events)")
-    ratio = r["runner_vs_raw"]
-    print(f"runner / raw round trip: {100 * ratio:.0f} %")
+          f"(encode, send, decode, log, events); timed on every {TIMED_EVERY}th tick, each part with a clock read "
+          f"of its own (a system call: about 70 us in the vcan guest)")
+    print(f"runner / raw round trip: {100 * r['runner_vs_raw']:.0f} % (the node IDLE: its PLANT_ACTUATOR only)")
+    ratio = r["runner_vs_raw_telem"]
+    print(f"runner / raw+telem: {100 * ratio:.0f} % (the same frames as the runner's: the runner's own cost)")
     if ratio < 0.8:
-        adds = r["added_us_per_step"]
-        worst = max(adds, key=lambda k: adds[k])
-        print(f"more than 20 % below the raw round trip: the largest addition is {worst} "
-              f"({adds[worst]:.0f} us per step)")
+        print(f"the runner's own step costs more than 20 % of its traffic's raw round trip: "
+              f"{r['us_per_step']['runner'] - r['us_per_step']['raw+telem']:.0f} us per step")
     (out / "bench.json").write_text(json.dumps(r, indent=2) + "\n")
     print(f"written: {out / 'bench.json'}")
     return 0
