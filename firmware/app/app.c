@@ -1,12 +1,12 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* The application's core: start-up, the state machine and its commands, one
- * control tick (acquire, law, supervisor, output) and the housekeeping of
- * poll. It sends no frame: what a tick or poll has to send it marks in
+ * control tick (acquire, law, supervisor, output: the acquisition and the
+ * output are app_io.c's, the configuration builders and the rules between
+ * parameters app_config.c's) and the housekeeping of poll. It sends no frame: what a tick or poll has to send it marks in
  * app->tx_due, and the orchestrating step (app_step.c) has the frames adapter
  * (app_frames.c) send it. See app.h. */
 #include "app.h"
 
-#include <math.h>
 #include <stddef.h>
 #include <string.h>
 
@@ -33,26 +33,7 @@ pma_param_phase_t pma_app_phase(const pma_app_t *app)
     }
 }
 
-int pma_app_bridge_on(const pma_app_t *app)
-{
-    return app->plat.plant_bridge != 0 || app->params.sys_plant_bridge != 0;
-}
-
-/* The bridge was switched (sys.plant_bridge by SET, LOAD or RESTORE_DEFAULTS,
- * only possible with the output inactive): forget the other source's sample
- * state, so that a sample from before the switch never counts as fresh. */
-void pma_app_sync_bridge(pma_app_t *app)
-{
-    const uint8_t on = (uint8_t)pma_app_bridge_on(app);
-    if (on == app->bridge.active) return;
-    app->bridge.active = on;
-    app->bridge.have = app->bridge.fresh = app->bridge.gap = 0;
-    app->sensor.ticks_since_sample = 0;
-    app->sensor.sample_status = PMA_SAMPLE_NONE;
-    app->sensor.status = PMA_ERR_NOT_READY;
-}
-
-static int output_active(const pma_app_t *app)
+int pma_app_output_active(const pma_app_t *app)
 {
     return app->state == PMA_STATE_ARMED || app->state == PMA_STATE_RUNNING;
 }
@@ -64,121 +45,6 @@ void pma_app_raise_fault(pma_app_t *app, pma_fault_t fault)
         app->state = PMA_STATE_FAULT;
         app->fault = (uint8_t)fault;
     }
-}
-
-/* --------------------------------------------------------- configuration -- */
-
-void pma_app_adc_scaling(const pma_params_t *p, pma_adc_scaling_t *s)
-{
-    *s = (pma_adc_scaling_t){
-        .offset_cm = p->adc_offset_cm, .gain_cm_per_count = p->adc_gain_cm_per_count,
-        .raw_min_counts = (uint16_t)p->adc_raw_min_counts,
-        .raw_max_counts = (uint16_t)p->adc_raw_max_counts,
-        .wire_break_below_counts = (uint16_t)p->adc_wire_break_below_counts,
-    };
-}
-
-static void dac_scaling(const pma_params_t *p, pma_dac_scaling_t *s)
-{
-    *s = (pma_dac_scaling_t){
-        .counts_at_zero_kpa = p->dac_counts_at_zero_kpa, .counts_per_kpa = p->dac_counts_per_kpa,
-        .min_counts = (uint16_t)p->dac_min_counts, .max_counts = (uint16_t)p->dac_max_counts,
-    };
-}
-
-static void actuator_config(const pma_params_t *p, pma_actuator_config_t *c)
-{
-    *c = (pma_actuator_config_t){
-        .p0_kpa = p->act_p0_kpa, .kpa_per_u = p->act_kpa_per_u, .polarity = p->act_polarity,
-        .p_min_kpa = p->act_p_min_kpa, .p_max_kpa = p->act_p_max_kpa,
-        .slew_kpa_s = p->act_slew_kpa_s, .safe_mode = p->safety_safe_mode,
-        .safe_kpa = p->safety_safe_kpa,
-    };
-}
-
-/* Rules within the groups of parameters that act even while the output is
- * inactive (the sensor and DAC scalings): enforced at every SET, so the
- * safe-state output can always be converted. */
-int pma_app_check_param_groups(const pma_params_t *p)
-{
-    pma_adc_scaling_t as;
-    pma_dac_scaling_t ds;
-    pma_app_adc_scaling(p, &as);
-    dac_scaling(p, &ds);
-    int rc = pma_adc_validate_scaling(&as);
-    return rc != PMA_OK ? rc : pma_dac_validate_scaling(&ds);
-}
-
-/* The pressure p(u) = p0 + polarity * kpa_per_u * u at u, and whether it lies in
- * [p_min, p_max] (within float rounding: a set derived as u = p - p0 holds). */
-static int pressure_in_range(const pma_params_t *p, float u)
-{
-    const float k = (float)p->act_polarity * p->act_kpa_per_u;
-    const float pu = p->act_p0_kpa + k * u;
-    const float tol = 1e-3f + 1e-6f * fabsf(p->act_p_max_kpa);
-    return pu >= p->act_p_min_kpa - tol && pu <= p->act_p_max_kpa + tol;
-}
-
-int pma_app_param_rule(const pma_params_t *p, int set_only)
-{
-    /* checked at every SET (the scalings act while the output is inactive too) */
-    if (p->adc_gain_cm_per_count == 0.0f) return PMA_RULE_ADC_GAIN;
-    if (p->adc_raw_min_counts > p->adc_raw_max_counts) return PMA_RULE_ADC_RAW_ORDER;
-    if (p->adc_wire_break_below_counts > p->adc_raw_min_counts) return PMA_RULE_ADC_WIRE_BREAK;
-    if (p->dac_counts_per_kpa == 0.0f) return PMA_RULE_DAC_GAIN;
-    if (p->dac_min_counts > p->dac_max_counts) return PMA_RULE_DAC_ORDER;
-    if (set_only) return PMA_RULE_NONE;
-    /* checked at ARM and START */
-    if (p->act_polarity != 1 && p->act_polarity != -1) return PMA_RULE_ACT_POLARITY;
-    if (!(p->act_p_min_kpa >= 0.0f && p->act_p_min_kpa < p->act_p_max_kpa)) return PMA_RULE_ACT_P_ORDER;
-    if (!(p->act_p0_kpa >= p->act_p_min_kpa && p->act_p0_kpa <= p->act_p_max_kpa)) return PMA_RULE_ACT_P0;
-    if (p->safety_safe_mode == PMA_SAFE_FIXED && !(p->safety_safe_kpa <= p->act_p_max_kpa)) {
-        return PMA_RULE_SAFE_KPA;
-    }
-    if (!(p->safety_x_min_cm < p->safety_x_max_cm)) return PMA_RULE_X_ORDER;
-    if (!(p->ctrl_u_min < p->ctrl_u_max)) return PMA_RULE_U_ORDER;
-    if (!pressure_in_range(p, p->ctrl_u_min) || !pressure_in_range(p, p->ctrl_u_max)) {
-        return PMA_RULE_U_PRESSURE;
-    }
-    return PMA_RULE_NONE;
-}
-
-/* Rules between parameters, checked at ARM and START (docs/parameters.md). */
-static int check_cross_params(pma_app_t *app)
-{
-    const pma_params_t *p = &app->params;
-    pma_adc_scaling_t as;
-    pma_dac_scaling_t ds;
-    pma_actuator_config_t ac;
-    pma_app_adc_scaling(p, &as);
-    dac_scaling(p, &ds);
-    actuator_config(p, &ac);
-    int rc = pma_adc_validate_scaling(&as);
-    if (rc == PMA_OK) rc = pma_dac_validate_scaling(&ds);
-    if (rc == PMA_OK) rc = pma_actuator_validate(&ac);
-    if (rc == PMA_OK && !(p->safety_x_min_cm < p->safety_x_max_cm)) rc = PMA_ERR_RANGE;
-    if (rc == PMA_OK && !(p->ctrl_u_min < p->ctrl_u_max)) rc = PMA_ERR_RANGE;
-    const int rule = pma_app_param_rule(p, 0);
-    if (rc == PMA_OK && rule != PMA_RULE_NONE) rc = PMA_ERR_RANGE;
-    if (rc == PMA_ERR_RANGE) app->last_rule = (uint8_t)rule;
-    return rc;
-}
-
-/* Applies the timing parameters: tick period and, if running, the tick. */
-int pma_app_apply_timing(pma_app_t *app)
-{
-    const uint32_t hz = app->params.sys_tick_hz;
-    const uint32_t period_us = (1000000u + hz / 2u) / hz;
-    app->timing.period_s = 1.0f / (float)hz;
-    /* the heartbeat period may have changed too (RESTORE_DEFAULTS, LOAD):
-     * the next one no later than one new period from now */
-    const uint64_t next_hb = pma_hal_time_us() + 1000u * (uint64_t)app->params.sys_heartbeat_ms;
-    if (next_hb < app->timing.next_heartbeat_us) app->timing.next_heartbeat_us = next_hb;
-    if (app->timing.tick_started && period_us == app->timing.period_us) return PMA_OK; /* unchanged: keep it */
-    app->timing.period_us = period_us;
-    int rc = pma_hal_tick_start(app->timing.period_us);
-    app->timing.tick_started = (uint8_t)(rc == PMA_OK);
-    return rc;
 }
 
 /* ---------------------------------------------------------------- start-up -- */
@@ -233,7 +99,7 @@ int pma_app_core_init(pma_app_t *app, const pma_app_platform_t *plat)
     app->node_id = (uint8_t)(plat->node_id >= 0 && plat->node_id <= 15 ? plat->node_id
                                                                         : (int)app->params.sys_node_id);
     pma_actuator_config_t ac;
-    actuator_config(&app->params, &ac);
+    pma_app_actuator_config(&app->params, &ac);
     app->output.p_kpa = pma_actuator_safe_kpa(&ac, 0.0f);
 
     /* this node's ids, and the broadcasts: emergency stop and device-info request */
@@ -268,7 +134,7 @@ static int cmd_arm(pma_app_t *app)
     case PMA_STATE_FAULT: return PMA_ERR_FAULT;
     default: return PMA_ERR_STATE;
     }
-    int rc = check_cross_params(app);
+    int rc = pma_app_check_cross_params(app);
     if (rc != PMA_OK) return rc;
     if (pma_app_bridge_on(app) &&
         app->sensor.ticks_since_sample >= app->params.safety_sensor_timeout_ticks) {
@@ -293,7 +159,7 @@ static int cmd_start(pma_app_t *app)
 {
     if (app->state == PMA_STATE_FAULT) return PMA_ERR_FAULT;
     if (app->state != PMA_STATE_ARMED) return PMA_ERR_STATE;
-    int rc = check_cross_params(app);
+    int rc = pma_app_check_cross_params(app);
     if (rc == PMA_OK) rc = pma_ctrl_start(&app->ctrl, &app->params, app->timing.period_s);
     if (rc != PMA_OK) return rc;
     app->timing.run_ticks = 0;
@@ -352,7 +218,7 @@ int pma_app_command(pma_app_t *app, uint8_t command, uint8_t arg)
         return select_param(app, PMA_PARAM_REF_KIND, arg);
     case PMA_CMD_RESTART:
         /* only with the output safe: a reset must not drop an active output */
-        if (output_active(app)) return PMA_ERR_STATE;
+        if (pma_app_output_active(app)) return PMA_ERR_STATE;
         app->restart_pending = 1;
         return PMA_OK;
     default:
@@ -361,83 +227,6 @@ int pma_app_command(pma_app_t *app, uint8_t command, uint8_t arg)
 }
 
 /* --------------------------------------------------------------------- tick -- */
-
-/* The position of this tick: from the ADC, or the plant bridge's last sample. */
-static void acquire(pma_app_t *app)
-{
-    int rc;
-    if (pma_app_bridge_on(app)) {
-        if (!app->bridge.have) {
-            app->sensor.sample_status = PMA_SAMPLE_NONE;
-            if (app->sensor.ticks_since_sample != UINT32_MAX) ++app->sensor.ticks_since_sample;
-            app->sensor.status = PMA_ERR_NOT_READY;
-            return;
-        }
-        if (app->bridge.fresh) {
-            app->sensor.sample_status = app->bridge.gap ? PMA_SAMPLE_GAP : PMA_SAMPLE_NEW;
-            app->sensor.ticks_since_sample = 0;
-        } else {
-            app->sensor.sample_status = PMA_SAMPLE_REPEATED;
-            if (app->sensor.ticks_since_sample != UINT32_MAX) ++app->sensor.ticks_since_sample;
-        }
-        app->bridge.fresh = 0;
-        app->bridge.gap = 0;
-        app->sensor.raw_counts = app->bridge.raw_counts;
-        rc = PMA_OK;
-    } else {
-        app->sensor.ticks_since_sample = 0;
-        rc = pma_hal_adc_read(&app->sensor.raw_counts);
-    }
-    if (rc == PMA_OK) {
-        pma_adc_scaling_t s;
-        pma_app_adc_scaling(&app->params, &s);
-        float x = 0.0f;
-        rc = pma_adc_counts_to_cm(&s, app->sensor.raw_counts, &x);
-        if (rc == PMA_OK) app->sensor.x_cm = x;
-    }
-    app->sensor.status = rc;
-}
-
-static void write_output(pma_app_t *app)
-{
-    pma_actuator_config_t ac;
-    actuator_config(&app->params, &ac);
-    if (output_active(app)) {
-        app->output.p_kpa = pma_actuator_active_kpa(&ac, app->output.u, app->output.p_kpa, app->timing.period_s);
-    } else {
-        app->output.p_kpa = pma_actuator_safe_kpa(&ac, app->output.p_kpa);
-    }
-    pma_dac_scaling_t ds;
-    dac_scaling(&app->params, &ds);
-    uint16_t counts = app->output.dac_counts;
-    if (pma_dac_kpa_to_counts(&ds, app->output.p_kpa, &counts) == PMA_OK) {
-        app->output.dac_counts = counts;
-    } else {
-        /* unreachable while the scaling is enforced at SET (and p is finite):
-         * never keep an active pressure on the output */
-        pma_app_raise_fault(app, PMA_FAULT_OUTPUT);
-        app->output.dac_counts = 0;
-    }
-    if (pma_app_bridge_on(app)) {
-        app->tx_due |= PMA_APP_TX_ACTUATOR; /* the plant bridge's output: a frame */
-        return;
-    }
-    const int rc = pma_hal_dac_write(app->output.dac_counts);
-    if (rc != PMA_OK) {
-        /* the DAC refused the value (or failed): never leave an earlier,
-         * perhaps active, command on the output. Try the safe value, and if
-         * the DAC refuses that too, 0 counts (0 V / 0 mA: a regulator's
-         * minimum pressure). */
-        pma_app_raise_fault(app, PMA_FAULT_OUTPUT);
-        app->output.p_kpa = pma_actuator_safe_kpa(&ac, app->output.p_kpa);
-        if (pma_dac_kpa_to_counts(&ds, app->output.p_kpa, &counts) != PMA_OK ||
-            pma_hal_dac_write(counts) != PMA_OK) {
-            counts = 0;
-            (void)pma_hal_dac_write(counts);
-        }
-        app->output.dac_counts = counts;
-    }
-}
 
 static uint32_t ms_to_ticks(uint32_t ms, uint32_t tick_hz)
 {
@@ -451,7 +240,7 @@ void pma_app_core_tick(pma_app_t *app, uint32_t late_ticks)
     pma_app_sync_bridge(app);
     ++app->timing.ticks;
     app->timing.late_ticks = late_ticks;
-    acquire(app);
+    pma_app_acquire(app);
 
     uint8_t ctrl_error = 0;
     if (app->state == PMA_STATE_RUNNING) {
@@ -480,7 +269,7 @@ void pma_app_core_tick(pma_app_t *app, uint32_t late_ticks)
         .barrier_ticks = p->safety_barrier_ticks,
     };
     const pma_supervisor_input_t in = {
-        .output_active = (uint8_t)output_active(app),
+        .output_active = (uint8_t)pma_app_output_active(app),
         .running = (uint8_t)(app->state == PMA_STATE_RUNNING),
         .bus_off = bus_off,
         .sensor_status = app->sensor.status,
@@ -496,7 +285,7 @@ void pma_app_core_tick(pma_app_t *app, uint32_t late_ticks)
     const pma_fault_t f = pma_supervisor_check(&lim, &in);
     if (f != PMA_FAULT_NONE) pma_app_raise_fault(app, f); /* safe output below, this tick */
 
-    write_output(app);
+    pma_app_write_output(app);
 
     if (app->state == PMA_STATE_RUNNING && p->telem_decimation != 0) {
         if (++app->telem_count >= p->telem_decimation) {

@@ -1,0 +1,103 @@
+/* SPDX-License-Identifier: Apache-2.0 */
+/* The application's input and output: which source the position comes from (the
+ * ADC or the plant bridge), this tick's sample, and the pressure command to the
+ * DAC or the bridge, safe whenever the output is inactive or a conversion fails. */
+#include "actuator.h"
+#include "app_core.h"
+#include "generated/pma_proto.h"
+
+int pma_app_bridge_on(const pma_app_t *app)
+{
+    return app->plat.plant_bridge != 0 || app->params.sys_plant_bridge != 0;
+}
+
+/* The bridge was switched (sys.plant_bridge by SET, LOAD or RESTORE_DEFAULTS,
+ * only possible with the output inactive): forget the other source's sample
+ * state, so that a sample from before the switch never counts as fresh. */
+void pma_app_sync_bridge(pma_app_t *app)
+{
+    const uint8_t on = (uint8_t)pma_app_bridge_on(app);
+    if (on == app->bridge.active) return;
+    app->bridge.active = on;
+    app->bridge.have = app->bridge.fresh = app->bridge.gap = 0;
+    app->sensor.ticks_since_sample = 0;
+    app->sensor.sample_status = PMA_SAMPLE_NONE;
+    app->sensor.status = PMA_ERR_NOT_READY;
+}
+
+/* The position of this tick: from the ADC, or the plant bridge's last sample. */
+void pma_app_acquire(pma_app_t *app)
+{
+    int rc;
+    if (pma_app_bridge_on(app)) {
+        if (!app->bridge.have) {
+            app->sensor.sample_status = PMA_SAMPLE_NONE;
+            if (app->sensor.ticks_since_sample != UINT32_MAX) ++app->sensor.ticks_since_sample;
+            app->sensor.status = PMA_ERR_NOT_READY;
+            return;
+        }
+        if (app->bridge.fresh) {
+            app->sensor.sample_status = app->bridge.gap ? PMA_SAMPLE_GAP : PMA_SAMPLE_NEW;
+            app->sensor.ticks_since_sample = 0;
+        } else {
+            app->sensor.sample_status = PMA_SAMPLE_REPEATED;
+            if (app->sensor.ticks_since_sample != UINT32_MAX) ++app->sensor.ticks_since_sample;
+        }
+        app->bridge.fresh = 0;
+        app->bridge.gap = 0;
+        app->sensor.raw_counts = app->bridge.raw_counts;
+        rc = PMA_OK;
+    } else {
+        app->sensor.ticks_since_sample = 0;
+        rc = pma_hal_adc_read(&app->sensor.raw_counts);
+    }
+    if (rc == PMA_OK) {
+        pma_adc_scaling_t s;
+        pma_app_adc_scaling(&app->params, &s);
+        float x = 0.0f;
+        rc = pma_adc_counts_to_cm(&s, app->sensor.raw_counts, &x);
+        if (rc == PMA_OK) app->sensor.x_cm = x;
+    }
+    app->sensor.status = rc;
+}
+
+void pma_app_write_output(pma_app_t *app)
+{
+    pma_actuator_config_t ac;
+    pma_app_actuator_config(&app->params, &ac);
+    if (pma_app_output_active(app)) {
+        app->output.p_kpa = pma_actuator_active_kpa(&ac, app->output.u, app->output.p_kpa, app->timing.period_s);
+    } else {
+        app->output.p_kpa = pma_actuator_safe_kpa(&ac, app->output.p_kpa);
+    }
+    pma_dac_scaling_t ds;
+    pma_app_dac_scaling(&app->params, &ds);
+    uint16_t counts = app->output.dac_counts;
+    if (pma_dac_kpa_to_counts(&ds, app->output.p_kpa, &counts) == PMA_OK) {
+        app->output.dac_counts = counts;
+    } else {
+        /* unreachable while the scaling is enforced at SET (and p is finite):
+         * never keep an active pressure on the output */
+        pma_app_raise_fault(app, PMA_FAULT_OUTPUT);
+        app->output.dac_counts = 0;
+    }
+    if (pma_app_bridge_on(app)) {
+        app->tx_due |= PMA_APP_TX_ACTUATOR; /* the plant bridge's output: a frame */
+        return;
+    }
+    const int rc = pma_hal_dac_write(app->output.dac_counts);
+    if (rc != PMA_OK) {
+        /* the DAC refused the value (or failed): never leave an earlier,
+         * perhaps active, command on the output. Try the safe value, and if
+         * the DAC refuses that too, 0 counts (0 V / 0 mA: a regulator's
+         * minimum pressure). */
+        pma_app_raise_fault(app, PMA_FAULT_OUTPUT);
+        app->output.p_kpa = pma_actuator_safe_kpa(&ac, app->output.p_kpa);
+        if (pma_dac_kpa_to_counts(&ds, app->output.p_kpa, &counts) != PMA_OK ||
+            pma_hal_dac_write(counts) != PMA_OK) {
+            counts = 0;
+            (void)pma_hal_dac_write(counts);
+        }
+        app->output.dac_counts = counts;
+    }
+}
