@@ -116,7 +116,7 @@ int pma_app_send_actuator(pma_app_t *app)
 
 void pma_app_send_telemetry(pma_app_t *app)
 {
-    const pma_ctrl_out_t *o = &app->ctrl.out;
+    const pma_ctrl_out_t *o = pma_ctrl_out(&app->ctrl); /* Q16.16: converted here */
     const uint32_t mask = app->params.telem_mask;
     uint8_t d[8];
     if (mask & PMA_TELEM_MASK_A) {

@@ -1,8 +1,9 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* The application's controller slot: the reference, the velocity estimator and
  * the selected controller (ctrl.mode), built from the parameters at START and
- * stepped once per tick while RUNNING. Float variants (the board is a
- * Cortex-M4F). Pure: no HAL, no globals. */
+ * stepped once per tick while RUNNING, in the arithmetic the build chose (PMA_CTRL_Q16:
+ * float on cores with an FPU, Q16.16 without one). controller.c builds and checks the
+ * configurations, controller_f32.c / controller_q16.c step them. Pure: no HAL, no globals. */
 #ifndef PMA_CONTROLLER_H
 #define PMA_CONTROLLER_H
 
@@ -31,17 +32,47 @@ typedef struct pma_ctrl_out {
     uint8_t barrier;        /* PPC: a barrier clamp this step */
 } pma_ctrl_out_t;
 
+/* The controller slot's arithmetic, chosen at build time (CMake PMA_CTRL_ARITH, firmware/app):
+ * 0 float (the _f32 variants), 1 Q16.16 (the _q16 variants; docs/fixed-point.md). The
+ * parameters stay float in their physical units; START converts them once. */
+#ifndef PMA_CTRL_Q16
+#define PMA_CTRL_Q16 0
+#endif
+
+#if PMA_CTRL_Q16
+/* Q16.16 copies of the step's signals (pma_ctrl_out_t in fixed point) */
+typedef struct pma_ctrl_out_q16 {
+    pma_q16_t t_s, xr_cm, e_cm, xr_dot_cm_s, v_cm_s, u, internal1, internal2;
+} pma_ctrl_out_q16_t;
+#endif
+
 typedef struct pma_ctrl {
     uint8_t mode;           /* PMA_CTRL_MODE_* */
     float period_s, u_min, u_max;
-    pma_ref_f32_t ref;
     pma_ref_config_t ref_cfg;
+#if PMA_CTRL_Q16
+    pma_ref_q16_t ref;
+    pma_velest_q16_t vel;
+    union {
+        pma_ppc_q16_t ppc;
+        pma_mfac_q16_t mfac;
+        pma_pid_q16_t pid;
+    } c;
+    pma_mfac_q16_t shadow;  /* MFAC beside the PPC (fallback), as below */
+    pma_q16_t q_period_s, q_u_min, q_u_max, q_w1_cm, q_t_u_s;
+    pma_q16_t q_ref_ff_u_per_cm, q_ref_ff_lead_s, q_xr0_cm;
+    pma_ctrl_out_q16_t q_out;
+#else
+    pma_ref_f32_t ref;
     pma_velest_f32_t vel;
     union {
         pma_ppc_f32_t ppc;
         pma_mfac_f32_t mfac;
         pma_pid_f32_t pid;
     } c;
+    /* PPC's guarantee monitor and fallback (docs/controllers.md, "When the guarantee is lost") */
+    pma_mfac_f32_t shadow;  /* MFAC, learning from the applied input while the PPC is in charge */
+#endif
     uint8_t ppc_ref_vel;    /* option ppc.ref_vel: the law damps x' - x_r' */
     uint8_t ppc_obs_pos;    /* option ppc.obs_pos: the law's x is the observer's x_hat */
     uint8_t xr0_set;        /* xr0_cm holds the reference at START */
@@ -49,8 +80,6 @@ typedef struct pma_ctrl {
     float ref_ff_lead_s;    /* ppc.ref_ff_lead_s: how far ahead the feedforward takes x_r [s] */
     float xr0_cm;           /* the reference at START [cm] */
     uint32_t breaches;      /* steps with a barrier clamp since START */
-    /* PPC's guarantee monitor and fallback (docs/controllers.md, "When the guarantee is lost") */
-    pma_mfac_f32_t shadow;  /* MFAC, learning from the applied input while the PPC is in charge */
     uint8_t fallback_mode;  /* ppc.fallback: 0 none, 1 MFAC */
     uint8_t lost;           /* the guarantee was lost since START (latched) */
     uint8_t fallback_active;/* MFAC is in charge (from the first lost tick until STOP) */
@@ -60,8 +89,25 @@ typedef struct pma_ctrl {
     uint32_t lost_ticks;    /* lost ticks since START (saturates at 2^32-1) */
     float lost_at_s;        /* control time of the first of them [s] */
     float stream_margin_cm; /* STREAM targets keep this far inside the band (PPC: w1) */
+    /* the last step's signals in float: read them with pma_ctrl_out() (Q16.16: converted
+     * there, not in every step) */
     pma_ctrl_out_t out;
 } pma_ctrl_t;
+
+/* The configurations START builds from the parameters, for the arithmetic's init
+ * (controller_f32.c or controller_q16.c). */
+typedef struct pma_ctrl_setup {
+    pma_velest_config_t vel;
+    pma_ppc_config_t ppc;   /* mode PPC */
+    pma_mfac_config_t mfac; /* mode MFAC, or PPC's fallback (fallback_mode) */
+    pma_pid_config_t pid;   /* mode PID */
+} pma_ctrl_setup_t;
+
+/* The arithmetic's part of START: the instances from su (s's fields from the parameters
+ * are set); PMA_ERR_FIXED_RANGE when a value does not fit Q16.16. */
+int pma_ctrl_init_arith(pma_ctrl_t *s, const pma_ctrl_setup_t *su);
+/* The arithmetic's part of pma_ctrl_stream, after the band check. */
+int pma_ctrl_stream_arith(pma_ctrl_t *s, float target_cm);
 
 /* Builds and validates everything from p for control period period_s; checks
  * the reference against the constraint band (safety.x_min/x_max_cm; with
@@ -101,6 +147,9 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
  * mfac.* gains), which has run beside the law from START with its u(k-1) set to the input
  * actually applied (its pseudo partial derivative phi learns from the rig's real response), so
  * the hand-over is bumpless; the law is not stepped again until STOP. */
+
+/* The last step's signals in float (for telemetry and tests): Q16.16 converts them here. */
+const pma_ctrl_out_t *pma_ctrl_out(pma_ctrl_t *s);
 
 /* STREAM reference: a new target, accepted when finite and strictly inside
  * the constraint band (x_min + m, x_max - m), m = w1 for PPC with the band

@@ -41,6 +41,17 @@
  * T_NVM_BPS (blocks per slot) before including this header; the others run
  * without storage (store_blocks_per_slot 0, as a platform without NVM).
  * Parameter sets are compared by their CRC-32 rather than kept as copies. */
+/* The controller slot's resolution (PMA_CTRL_Q16, firmware/app/controller.h): one Q16.16 LSB
+ * (2^-16 = 1.5e-5) where the slot computes in fixed point, 0 in float. Tolerances on the
+ * slot's signals add it. */
+#if PMA_CTRL_Q16
+#define CTRL_LSB (1.0 / 65536.0)
+#define CTRL_F32(v) pma_q16_to_f32(v)   /* a Q16.16 state of the slot, in float */
+#else
+#define CTRL_LSB 0.0
+#define CTRL_F32(v) (v)
+#endif
+
 #define T_NODE 3u          /* node id of the device under test (not 0: addressing matters) */
 #define T_OTHER_NODE 5u    /* another node on the same bus */
 #define T_BLOCK 16u        /* fake NVM: 16-byte blocks, 8-byte program unit */

@@ -342,7 +342,7 @@ static void test_barrier(void)
         cap_clear();
         step();
         ++t;
-        run = app.ctrl.out.barrier ? run + 1u : 0u;
+        run = pma_ctrl_out(&app.ctrl)->barrier ? run + 1u : 0u;
         if (run < 100u) {
             assert_state(app.state, PMA_STATE_RUNNING);
         } else {
@@ -368,7 +368,7 @@ static void test_barrier(void)
     for (t = 0; t < 1500; ++t) {
         if (t % 100 == 0) send_host_heartbeat((uint8_t)t);
         step();
-        run = app.ctrl.out.barrier ? run + 1u : 0u;
+        run = pma_ctrl_out(&app.ctrl)->barrier ? run + 1u : 0u;
         if (run > longest) longest = run;
     }
     assert_state(app.state, PMA_STATE_RUNNING);
@@ -395,7 +395,7 @@ static void test_barrier_hands_over_to_mfac(void)
         step();
         ++t;
         assert_state(app.state, PMA_STATE_RUNNING);
-        const pma_ctrl_out_t *o = &app.ctrl.out;
+        const pma_ctrl_out_t *o = pma_ctrl_out(&app.ctrl);
         if (handover_tick == 0) {
             run = o->barrier ? run + 1u : 0u;
             if (run < 100u) {
@@ -407,7 +407,7 @@ static void test_barrier_hands_over_to_mfac(void)
             handover_t_s = o->t_s;
             TEST_ASSERT_TRUE(app.ctrl.lost && app.ctrl.fallback_active);
             /* MFAC's first step continues from the input the law applied */
-            TEST_ASSERT_FLOAT_WITHIN(0.0f, u_before, app.ctrl.shadow.u2);
+            TEST_ASSERT_FLOAT_WITHIN((float)CTRL_LSB, u_before, CTRL_F32(app.ctrl.shadow.u2));
         }
         TEST_ASSERT_TRUE(o->flags & PMA_CTRL_FLAG_FALLBACK);
         TEST_ASSERT_TRUE(o->flags & PMA_CTRL_FLAG_GUARANTEE_LOST);

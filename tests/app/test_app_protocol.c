@@ -437,7 +437,7 @@ static void test_telemetry_running_only_decimation_and_mask(void)
     TEST_ASSERT_EQUAL_INT(0, pma_proto_telem_e_unpack(&te, last_frame(ids[4])->data, 8));
     /* run time since START: the control time of this (10th) step, t = 0 at START's */
     TEST_ASSERT_EQUAL_INT(9, ta.time_ms);
-    assert_near(app.ctrl.out.t_s, 0.009, 1e-6);
+    assert_near(pma_ctrl_out(&app.ctrl)->t_s, 0.009, 1e-6 + CTRL_LSB);
     assert_near(ta.x_cm, -1.5f, 0.002);
     assert_near(tb.xr_cm, -1.5f, 1e-6);
     assert_near(tb.e_cm, ta.x_cm - tb.xr_cm, 1e-6);
@@ -720,13 +720,13 @@ static void test_wrong_length_frames_dropped(void)
         step();
         TEST_ASSERT_EQUAL_INT(0, sent(PMA_PROTO_COMMAND_ACK_FRAME_ID) +
                                      sent(PMA_PROTO_PARAM_RESP_FRAME_ID));
-        assert_near(app.ctrl.out.xr_cm, -1.5f, 1e-6);
+        assert_near(pma_ctrl_out(&app.ctrl)->xr_cm, -1.5f, 1e-6);
     }
     TEST_ASSERT_EQUAL_INT(4, app.counters.frames_bad);
     TEST_ASSERT_EQUAL_INT(0, app.counters.setpoints_rejected);
     inject(PMA_PROTO_SETPOINT_FRAME_ID, 4, d);
     step();
-    assert_near(app.ctrl.out.xr_cm, -1.0f, 1e-6);
+    assert_near(pma_ctrl_out(&app.ctrl)->xr_cm, -1.0f, 1e-6);
 }
 
 /* SETPOINT: used by the STREAM reference while RUNNING, inside the band. */
@@ -745,7 +745,7 @@ static void test_setpoint_stream(void)
     inject(PMA_PROTO_SETPOINT_FRAME_ID, 4, d);
     step();
     TEST_ASSERT_EQUAL_INT(2, app.counters.setpoints_rejected);
-    assert_near(app.ctrl.out.xr_cm, -1.5f, 1e-6);
+    assert_near(pma_ctrl_out(&app.ctrl)->xr_cm, -1.5f, 1e-6);
     command_ok(PMA_CMD_STOP, 0, PMA_OK);
     /* STREAM at 0.5 cm/s from the offset -1.5 (controller OFF: the position
      * stays put, the reference is what is watched) */
@@ -753,10 +753,10 @@ static void test_setpoint_stream(void)
     set_u32(PMA_PARAM_REF_KIND, PMA_REF_KIND_STREAM);
     set_f32(PMA_PARAM_REF_RATE_CM_S, 0.5f);
     command_ok(PMA_CMD_START, 0, PMA_OK);
-    assert_near(app.ctrl.out.xr_cm, -1.5f, 1e-6);
+    assert_near(pma_ctrl_out(&app.ctrl)->xr_cm, -1.5f, 1e-6);
     inject(PMA_PROTO_SETPOINT_FRAME_ID, 4, d);
     steps(100);
-    assert_near(app.ctrl.out.xr_cm, -1.45f, 1e-3); /* 0.05 cm in 0.1 s */
+    assert_near(pma_ctrl_out(&app.ctrl)->xr_cm, -1.45f, 1e-3); /* 0.05 cm in 0.1 s */
     TEST_ASSERT_EQUAL_INT(2, app.counters.setpoints_rejected);
     /* outside the band (or on its edge), NaN, infinity: rejected, target kept */
     const float bad[] = {0.0f, 0.5f, -3.0f, -10.0f, NAN, INFINITY};
@@ -769,7 +769,7 @@ static void test_setpoint_stream(void)
         TEST_ASSERT_EQUAL_INT(3u + i, app.counters.setpoints_rejected);
     }
     steps_hb(1000);
-    assert_near(app.ctrl.out.xr_cm, -1.0f, 1e-3);
+    assert_near(pma_ctrl_out(&app.ctrl)->xr_cm, -1.0f, 1e-3);
     assert_state(app.state, PMA_STATE_RUNNING);
 }
 

@@ -1,0 +1,140 @@
+/* SPDX-License-Identifier: Apache-2.0 */
+/* The controller slot in float (PMA_CTRL_Q16 0): the _f32 instances and the
+ * step. See controller.h. */
+#include "controller.h"
+
+#if !PMA_CTRL_Q16
+
+#include <math.h>
+#include <stddef.h>
+
+#define CHECK(expr)                     \
+    do {                                \
+        int rc_ = (expr);               \
+        if (rc_ != PMA_OK) return rc_;  \
+    } while (0)
+
+/* MFAC's reference of the next sample, y*(k+1); STREAM's next value is not known yet: this
+ * sample's. */
+static float next_reference(const pma_ctrl_t *s, float t_s)
+{
+    float xr_next;
+    if (pma_ref_value_f32(&s->ref_cfg, t_s + s->period_s, &xr_next, NULL) != PMA_OK) {
+        xr_next = s->out.xr_cm;
+    }
+    return xr_next;
+}
+
+static float clampf(float v, float lo, float hi)
+{
+    return v < lo ? lo : (v > hi ? hi : v);
+}
+
+int pma_ctrl_init_arith(pma_ctrl_t *s, const pma_ctrl_setup_t *su)
+{
+    CHECK(pma_ref_init_f32(&s->ref, &s->ref_cfg));
+    CHECK(pma_velest_init_f32(&s->vel, &su->vel));
+    switch (s->mode) {
+    case PMA_CTRL_MODE_PPC:
+        CHECK(pma_ppc_init_f32(&s->c.ppc, &su->ppc));
+        return s->fallback_mode ? pma_mfac_init_f32(&s->shadow, &su->mfac) : PMA_OK;
+    case PMA_CTRL_MODE_MFAC: return pma_mfac_init_f32(&s->c.mfac, &su->mfac);
+    case PMA_CTRL_MODE_PID: return pma_pid_init_f32(&s->c.pid, &su->pid);
+    default: return PMA_OK;
+    }
+}
+
+int pma_ctrl_stream_arith(pma_ctrl_t *s, float target_cm)
+{
+    return pma_ref_stream_f32(&s->ref, target_cm);
+}
+
+const pma_ctrl_out_t *pma_ctrl_out(pma_ctrl_t *s)
+{
+    return &s->out;
+}
+
+int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float *u)
+{
+    if (s == NULL || u == NULL) return PMA_ERR_NULL;
+    *u = 0.0f;
+    pma_ctrl_out_t *o = &s->out;
+    o->t_s = t_s;
+    o->flags = 0;
+    o->barrier = 0;
+    o->internal1 = o->internal2 = 0.0f;
+    CHECK(pma_ref_eval_f32(&s->ref, t_s, &o->xr_cm, &o->xr_dot_cm_s));
+    CHECK(pma_velest_step_f32(&s->vel, x_cm, &o->v_cm_s));
+    o->e_cm = x_cm - o->xr_cm;
+
+    float out = 0.0f;
+    switch (s->mode) {
+    case PMA_CTRL_MODE_PPC: {
+        float u_mfac = 0.0f;
+        if (s->fallback_mode) {
+            CHECK(pma_mfac_step_f32(&s->shadow, x_cm, next_reference(s, t_s), &u_mfac));
+        }
+        if (!s->fallback_active) {
+            /* the options (controller.h) choose the law's inputs */
+            const float x_law_cm = s->ppc_obs_pos ? s->vel.xh : x_cm;
+            const float v_law_cm_s = s->ppc_ref_vel ? o->v_cm_s - o->xr_dot_cm_s : o->v_cm_s;
+            CHECK(pma_ppc_step_f32(&s->c.ppc, t_s, x_law_cm, v_law_cm_s, o->xr_cm, &out));
+            if (s->ref_ff_u_per_cm != 0.0f) {
+                if (!s->xr0_set) {
+                    s->xr0_cm = o->xr_cm;
+                    s->xr0_set = 1;
+                }
+                const float ahead_cm = (o->xr_cm - s->xr0_cm) + s->ref_ff_lead_s * o->xr_dot_cm_s;
+                out = clampf(out + s->ref_ff_u_per_cm * ahead_cm, s->u_min, s->u_max);
+            }
+            o->flags = s->c.ppc.out.flags;
+            o->internal1 = s->c.ppc.out.lambda1_cm;
+            o->internal2 = s->c.ppc.out.lambda2_cm_s;
+            o->barrier = (uint8_t)((o->flags & (PMA_PPC_FLAG_BARRIER1 | PMA_PPC_FLAG_BARRIER2)) != 0);
+        }
+        s->barrier_run = o->barrier ? s->barrier_run + 1u : 0u;
+        const int clamp_run = s->barrier_ticks != 0 && s->barrier_run >= s->barrier_ticks;
+        if ((t_s >= s->t_u_s && fabsf(o->e_cm) >= s->w1_cm) || clamp_run) {
+            if (!s->lost) s->lost_at_s = t_s;
+            s->lost = 1;
+            if (s->lost_ticks != UINT32_MAX) ++s->lost_ticks;
+            if (s->fallback_mode) s->fallback_active = 1;
+        }
+        if (s->fallback_active) {
+            out = u_mfac;
+            o->flags = s->shadow.flags | PMA_CTRL_FLAG_FALLBACK;
+            o->internal1 = s->shadow.phi;   /* TELEM_D as in mode MFAC */
+            o->internal2 = s->shadow.u1;
+        }
+        if (s->lost) o->flags |= PMA_CTRL_FLAG_GUARANTEE_LOST;
+        if (s->fallback_mode) s->shadow.u1 = out; /* MFAC learns from the input applied */
+        break;
+    }
+    case PMA_CTRL_MODE_MFAC: {
+        /* MFAC's law uses the reference of the next sample, y*(k+1) */
+        CHECK(pma_mfac_step_f32(&s->c.mfac, x_cm, next_reference(s, t_s), &out));
+        o->flags = s->c.mfac.flags;
+        o->internal1 = s->c.mfac.phi;
+        o->internal2 = s->c.mfac.u1;
+        break;
+    }
+    case PMA_CTRL_MODE_PID:
+        CHECK(pma_pid_step_f32(&s->c.pid, o->xr_cm, x_cm, &out));
+        o->flags = s->c.pid.flags;
+        o->internal1 = s->c.pid.i;
+        o->internal2 = s->c.pid.d;
+        break;
+    case PMA_CTRL_MODE_OPEN_LOOP:
+        out = isfinite(openloop_u) ? clampf(openloop_u, s->u_min, s->u_max) : openloop_u;
+        break;
+    default:
+        out = 0.0f;
+        break;
+    }
+    if (o->barrier && s->breaches != UINT32_MAX) ++s->breaches;
+    o->u = out;
+    *u = out;
+    return PMA_OK;
+}
+
+#endif /* !PMA_CTRL_Q16 */

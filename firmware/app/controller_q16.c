@@ -1,0 +1,191 @@
+/* SPDX-License-Identifier: Apache-2.0 */
+/* The controller slot in Q16.16 (PMA_CTRL_Q16 1): the _q16 instances and the
+ * step, for cores without an FPU. The parameters arrive in float at START and
+ * are converted once (a value outside the Q16.16 range: PMA_ERR_FIXED_RANGE;
+ * docs/fixed-point.md lists each module's limits); each step converts its
+ * inputs (t, x) and its output u, and nothing else: the telemetry's signals are
+ * converted only when read (pma_ctrl_out). Same logic as controller_f32.c, in
+ * saturating Q16.16 arithmetic (pma/fixed.h). See controller.h. */
+#include "controller.h"
+
+#if PMA_CTRL_Q16
+
+#include <math.h>
+#include <stddef.h>
+
+#define CHECK(expr)                     \
+    do {                                \
+        int rc_ = (expr);               \
+        if (rc_ != PMA_OK) return rc_;  \
+    } while (0)
+
+/* v in Q16.16, PMA_ERR_FIXED_RANGE when it does not fit (strictly inside +-32767) */
+static int to_q16(float v, pma_q16_t *q)
+{
+    if (!isfinite(v)) return PMA_ERR_NOT_FINITE;
+    if (!(fabsf(v) < 32767.0f)) return PMA_ERR_FIXED_RANGE;
+    *q = pma_q16_from_f32(v);
+    return PMA_OK;
+}
+
+/* a Q32.32 accumulator (the estimators' and the PID's) rounded to Q16.16, saturated */
+static pma_q16_t q32_to_q16(int64_t a)
+{
+    return pma_q16_sat64(pma_rshift_round(a, 16));
+}
+
+static pma_q16_t q16_abs(pma_q16_t a)
+{
+    return a < 0 ? pma_q16_sneg(a) : a;
+}
+
+int pma_ctrl_init_arith(pma_ctrl_t *s, const pma_ctrl_setup_t *su)
+{
+    CHECK(to_q16(s->period_s, &s->q_period_s));
+    CHECK(to_q16(s->u_min, &s->q_u_min));
+    CHECK(to_q16(s->u_max, &s->q_u_max));
+    CHECK(pma_ref_init_q16(&s->ref, &s->ref_cfg));
+    CHECK(pma_velest_init_q16(&s->vel, &su->vel));
+    switch (s->mode) {
+    case PMA_CTRL_MODE_PPC:
+        CHECK(to_q16(s->w1_cm, &s->q_w1_cm));
+        CHECK(to_q16(s->t_u_s, &s->q_t_u_s));
+        CHECK(to_q16(s->ref_ff_u_per_cm, &s->q_ref_ff_u_per_cm));
+        CHECK(to_q16(s->ref_ff_lead_s, &s->q_ref_ff_lead_s));
+        CHECK(pma_ppc_init_q16(&s->c.ppc, &su->ppc));
+        return s->fallback_mode ? pma_mfac_init_q16(&s->shadow, &su->mfac) : PMA_OK;
+    case PMA_CTRL_MODE_MFAC: return pma_mfac_init_q16(&s->c.mfac, &su->mfac);
+    case PMA_CTRL_MODE_PID: return pma_pid_init_q16(&s->c.pid, &su->pid);
+    default: return PMA_OK;
+    }
+}
+
+int pma_ctrl_stream_arith(pma_ctrl_t *s, float target_cm)
+{
+    pma_q16_t q;
+    CHECK(to_q16(target_cm, &q));
+    return pma_ref_stream_q16(&s->ref, q);
+}
+
+const pma_ctrl_out_t *pma_ctrl_out(pma_ctrl_t *s)
+{
+    const pma_ctrl_out_q16_t *q = &s->q_out;
+    pma_ctrl_out_t *o = &s->out;
+    o->t_s = pma_q16_to_f32(q->t_s);
+    o->xr_cm = pma_q16_to_f32(q->xr_cm);
+    o->e_cm = pma_q16_to_f32(q->e_cm);
+    o->xr_dot_cm_s = pma_q16_to_f32(q->xr_dot_cm_s);
+    o->v_cm_s = pma_q16_to_f32(q->v_cm_s);
+    o->u = pma_q16_to_f32(q->u);
+    o->internal1 = pma_q16_to_f32(q->internal1);
+    o->internal2 = pma_q16_to_f32(q->internal2);
+    return o;
+}
+
+/* MFAC's reference of the next sample, y*(k+1); STREAM's next value is not known yet: this
+ * sample's. The other kinds' evaluation only reads the instance. */
+static pma_q16_t next_reference(pma_ctrl_t *s, pma_q16_t t)
+{
+    pma_q16_t xr_next;
+    if (s->ref_cfg.kind == PMA_REF_STREAM ||
+        pma_ref_eval_q16(&s->ref, pma_q16_sadd(t, s->q_period_s), &xr_next, NULL) != PMA_OK) {
+        xr_next = s->q_out.xr_cm;
+    }
+    return xr_next;
+}
+
+int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float *u)
+{
+    if (s == NULL || u == NULL) return PMA_ERR_NULL;
+    *u = 0.0f;
+    if (!isfinite(t_s) || !isfinite(x_cm)) return PMA_ERR_NOT_FINITE;
+    pma_ctrl_out_q16_t *o = &s->q_out;
+    const pma_q16_t t = pma_q16_from_f32(t_s);
+    const pma_q16_t x = pma_q16_from_f32(x_cm);
+    o->t_s = t;
+    s->out.flags = 0;
+    s->out.barrier = 0;
+    o->internal1 = o->internal2 = 0;
+    CHECK(pma_ref_eval_q16(&s->ref, t, &o->xr_cm, &o->xr_dot_cm_s));
+    CHECK(pma_velest_step_q16(&s->vel, x, &o->v_cm_s));
+    o->e_cm = pma_q16_ssub(x, o->xr_cm);
+
+    pma_q16_t out = 0;
+    uint32_t flags = 0;
+    uint8_t barrier = 0;
+    switch (s->mode) {
+    case PMA_CTRL_MODE_PPC: {
+        pma_q16_t u_mfac = 0;
+        if (s->fallback_mode) CHECK(pma_mfac_step_q16(&s->shadow, x, next_reference(s, t), &u_mfac));
+        if (!s->fallback_active) {
+            /* the options (controller.h) choose the law's inputs */
+            const pma_q16_t x_law = s->ppc_obs_pos ? q32_to_q16(s->vel.xh_q32) : x;
+            const pma_q16_t v_law = s->ppc_ref_vel ? pma_q16_ssub(o->v_cm_s, o->xr_dot_cm_s) : o->v_cm_s;
+            CHECK(pma_ppc_step_q16(&s->c.ppc, t, x_law, v_law, o->xr_cm, &out));
+            if (s->q_ref_ff_u_per_cm != 0) {
+                if (!s->xr0_set) {
+                    s->q_xr0_cm = o->xr_cm;
+                    s->xr0_set = 1;
+                }
+                const pma_q16_t ahead = pma_q16_sadd(pma_q16_ssub(o->xr_cm, s->q_xr0_cm),
+                                                     pma_q16_smul(s->q_ref_ff_lead_s, o->xr_dot_cm_s));
+                out = pma_q16_clamp(pma_q16_sadd(out, pma_q16_smul(s->q_ref_ff_u_per_cm, ahead)),
+                                    s->q_u_min, s->q_u_max);
+            }
+            flags = s->c.ppc.out.flags;
+            o->internal1 = s->c.ppc.out.lambda1_cm;
+            o->internal2 = s->c.ppc.out.lambda2_cm_s;
+            barrier = (uint8_t)((flags & (PMA_PPC_FLAG_BARRIER1 | PMA_PPC_FLAG_BARRIER2)) != 0);
+        }
+        s->barrier_run = barrier ? s->barrier_run + 1u : 0u;
+        const int clamp_run = s->barrier_ticks != 0 && s->barrier_run >= s->barrier_ticks;
+        if ((t >= s->q_t_u_s && q16_abs(o->e_cm) >= s->q_w1_cm) || clamp_run) {
+            if (!s->lost) s->lost_at_s = t_s;
+            s->lost = 1;
+            if (s->lost_ticks != UINT32_MAX) ++s->lost_ticks;
+            if (s->fallback_mode) s->fallback_active = 1;
+        }
+        if (s->fallback_active) {
+            out = u_mfac;
+            flags = s->shadow.flags | PMA_CTRL_FLAG_FALLBACK;
+            o->internal1 = s->shadow.phi;   /* TELEM_D as in mode MFAC */
+            o->internal2 = s->shadow.u1;
+        }
+        if (s->lost) flags |= PMA_CTRL_FLAG_GUARANTEE_LOST;
+        if (s->fallback_mode) s->shadow.u1 = out; /* MFAC learns from the input applied */
+        break;
+    }
+    case PMA_CTRL_MODE_MFAC:
+        /* MFAC's law uses the reference of the next sample, y*(k+1) */
+        CHECK(pma_mfac_step_q16(&s->c.mfac, x, next_reference(s, t), &out));
+        flags = s->c.mfac.flags;
+        o->internal1 = s->c.mfac.phi;
+        o->internal2 = s->c.mfac.u1;
+        break;
+    case PMA_CTRL_MODE_PID:
+        CHECK(pma_pid_step_q16(&s->c.pid, o->xr_cm, x, &out));
+        flags = s->c.pid.flags;
+        o->internal1 = q32_to_q16(s->c.pid.i_q32);
+        o->internal2 = s->c.pid.d;
+        break;
+    case PMA_CTRL_MODE_OPEN_LOOP: {
+        /* ctrl.openloop_u is live and float: clamped in float, as the float build does */
+        const float ol = isfinite(openloop_u)
+                             ? (openloop_u < s->u_min ? s->u_min : (openloop_u > s->u_max ? s->u_max : openloop_u))
+                             : openloop_u;
+        o->u = pma_q16_from_f32(ol);
+        *u = ol;
+        return PMA_OK;
+    }
+    default:
+        break;
+    }
+    s->out.flags = flags;
+    s->out.barrier = barrier;
+    if (barrier && s->breaches != UINT32_MAX) ++s->breaches;
+    o->u = out;
+    *u = pma_q16_to_f32(out);
+    return PMA_OK;
+}
+
+#endif /* PMA_CTRL_Q16 */
