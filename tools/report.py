@@ -25,6 +25,13 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 PRESETS = ["host", "cortex-m4f", "cortex-m3", "cortex-m0"]
 ARM = ["cortex-m4f", "cortex-m3", "cortex-m0"]
+# the application's whole tick in both arithmetics of its controller slot (PMA_CTRL_ARITH):
+# the presets' defaults (float on host and M4F, Q16.16 on M3 and M0) and the Q16.16 presets
+APP_PRESETS = ["host", "host-q16", "cortex-m4f", "cortex-m4f-q16", "cortex-m3", "cortex-m0"]
+APP_TICK_TARGETS = [("app_tick_q16", "cortex-m0", 3000)]   # instructions per tick (issue)
+# the libraries of the application's image (bench_app_tick's link map; the fake HAL,
+# Unity-free bench code and libc are not counted)
+APP_LIBS = ["pma_app", "pma_control", "pma_proto", "pma_storage", "pma_common"]
 
 # (benchmark name, preset, max instructions per step) from the issue
 TARGETS = [
@@ -78,6 +85,40 @@ def bench_lines(preset: str) -> tuple[dict[str, float], list[str]]:
         figures[m.group(2)] = float(m.group(3))
     accuracy = [m.group(1) for m in re.finditer(r"^ACCURACY \S+ (.*)$", out, re.M)]
     return figures, accuracy
+
+
+def app_tick_lines(preset: str) -> tuple[dict[str, float], int | None]:
+    """bench_app_tick's figures: 'app_tick_<arith>(<case>)' -> instructions (ns on host) per
+    tick, and sizeof(pma_app_t) [bytes]."""
+    out = run(["cmake", "--build", "--preset", preset, "--target", "run-bench_app_tick"])
+    size = re.search(r"^SIZE \S+ pma_app_t ([0-9]+) bytes", out, re.M)
+    return ({m.group(2): float(m.group(3))
+             for m in re.finditer(r"^BENCH (\S+) (app_tick_\S+) (-?[0-9.]+) (\S+)/tick", out, re.M)},
+            int(size.group(1)) if size else None)
+
+
+def app_memory(preset: str) -> dict[str, int] | None:
+    """Flash (.text, .rodata, .data) and RAM (.data, .bss) of the application's libraries as
+    linked into bench_app_tick (its map: the sections --gc-sections kept), bytes."""
+    path = ROOT / "build" / preset / "tests/bench/bench_app_tick.map"
+    if not path.exists():
+        return None
+    text = path.read_text()
+    text = text[text.find("Linker script and memory map"):]
+    libs = "|".join(APP_LIBS)
+    flash = ram = 0
+    pat = (r"^ (\.(?:text|rodata|data|bss)\S*)\s+0x[0-9a-f]+\s+0x([0-9a-f]+) "
+           rf"\S*lib(?:{libs})\.a\(")
+    for m in re.finditer(pat, text.replace("\n                ", " "), re.M):
+        section, size = m.group(1), int(m.group(2), 16)
+        if section.startswith((".text", ".rodata")):
+            flash += size
+        elif section.startswith(".data"):
+            flash += size
+            ram += size
+        else:
+            ram += size
+    return {"flash": flash, "ram": ram}
 
 
 def code_sizes(preset: str) -> dict[str, int]:
@@ -164,6 +205,40 @@ def main() -> int:
                 for m, objs in MODULES.items()]
         say(table(["module", *arm], rows))
         say("")
+    app = [p for p in APP_PRESETS if built(p)]
+    if app:
+        say("## Cost of a whole tick of the application (bench_app_tick)\n")
+        say("pma_app_step on the fake HAL, RUNNING a HOLD: sample and scaling, estimator, controller, "
+            "supervisor, actuator and DAC, heartbeat and telemetry at their decimation. Instructions "
+            "per tick on the Cortex-M cores, ns on the host; the arithmetic is the controller slot's.\n")
+        got_ticks = {p: app_tick_lines(p) for p in app}
+        ticks = {p: t for p, (t, _) in got_ticks.items()}
+        cases = list(dict.fromkeys(n.split("(", 1)[1] for p in app for n in ticks[p]))
+        rows = []
+        for p in app:
+            arith = next((n.split("(")[0].removeprefix("app_tick_") for n in ticks[p]), "-")
+            rows.append([p, arith, *(cell(next((v for n, v in ticks[p].items() if n.endswith(f"({c}")), None))
+                                     for c in cases)])
+        say(table(["preset", "slot", *(c.rstrip(")") for c in cases)], rows))
+        say("")
+        rows = []
+        for name, preset, limit in APP_TICK_TARGETS:
+            got = [v for n, v in ticks.get(preset, {}).items() if n.startswith(name)]
+            worst = max(got) if got else None
+            verdict = "n/a" if worst is None else ("met" if worst <= limit else "MISSED")
+            rows.append([name, preset, str(limit), "-" if worst is None else f"{worst:.0f}", verdict])
+        say("Target (the worst case above):\n")
+        say(table(["tick", "core", "target", "measured", ""], rows))
+        say("")
+        mem = {p: app_memory(p) for p in app}
+        rows = [[p, str(m["flash"]), str(m["ram"]), str(got_ticks[p][1] or "-")]
+                for p, m in mem.items() if m is not None]
+        if rows:
+            say("Memory of the application: flash of its libraries as linked (" + ", ".join(APP_LIBS) +
+                "; bench_app_tick's map, after --gc-sections) and RAM: their static data (none: no "
+                "globals) and pma_app_t, which the program holds (the stack comes on top), bytes:\n")
+            say(table(["preset", "flash", "static RAM", "pma_app_t"], rows))
+            say("")
     text = "\n".join(parts)
     print(text)
     if args.markdown:

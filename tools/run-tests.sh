@@ -182,7 +182,9 @@ if ((QUICK)); then
   exit 0
 fi
 stage "build every preset (tools/build-all.sh)" bash tools/build-all.sh
-for p in host cortex-m4f cortex-m3 cortex-m0; do
+# the controller slot in both arithmetics: float on host and M4F, Q16.16 on host-q16,
+# cortex-m4f-q16, M3 and M0 (their default)
+for p in host host-q16 cortex-m4f cortex-m4f-q16 cortex-m3 cortex-m0; do
   stage "ctest $p" ctest --preset "$p" -j2
 done
 side_by_side "pytest (no CAN)" no_can_pytest "pmactl unit tests (python-can virtual bus, no CAN)" pmactl_unit_tests

@@ -482,6 +482,40 @@ static void test_start_refused_bad_params(void)
     command_ok(PMA_CMD_START, 0, PMA_OK);
 }
 
+/* Values valid in float that Q16.16 cannot hold (docs/fixed-point.md): the Q16.16 slot refuses
+ * START with FIXED_RANGE and stays ARMED at the preset pressure; the float slot starts. */
+static void test_start_refused_outside_fixed_point(void)
+{
+    static const struct {
+        uint16_t id;
+        float bad, good;
+    } cases[] = {
+        {PMA_PARAM_PPC_W1_CM, 0.01f, 0.2f},       /* w1 < 1/64: 1/w1 does not fit Q8.24 */
+        {PMA_PARAM_PPC_REF_FF, 40000.0f, 0.0f},   /* beyond +-32767 */
+        {PMA_PARAM_MFAC_LAMBDA, 1e-4f, 0.03f},    /* MFAC's lambda < 1/1024 (PPC's fallback) */
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+        to_armed(0);
+        const uint16_t dac_armed = app.output.dac_counts;
+        set_f32(cases[i].id, cases[i].bad);
+        const int rc = command(PMA_CMD_START, 0).result;
+#if PMA_CTRL_Q16
+        assert_status(rc, PMA_ERR_FIXED_RANGE);
+        assert_state(app.state, PMA_STATE_ARMED);
+        step();
+        TEST_ASSERT_EQUAL_UINT16(dac_armed, app.output.dac_counts);
+        set_f32(cases[i].id, cases[i].good);
+        command_ok(PMA_CMD_START, 0, PMA_OK);
+#else
+        (void)dac_armed;
+        assert_status(rc, PMA_OK);
+#endif
+        command_ok(PMA_CMD_STOP, 0, PMA_OK);
+        command_ok(PMA_CMD_DISARM, 0, PMA_OK);
+        set_f32(cases[i].id, cases[i].good);
+    }
+}
+
 /* STOP from RUNNING returns to the preset pressure, DISARM to the safe one. */
 static void test_stop_and_disarm_outputs(void)
 {
@@ -542,6 +576,7 @@ int main(void)
     RUN_TEST(test_arm_refused_cross_params);
     RUN_TEST(test_start_refused_band_check);
     RUN_TEST(test_start_refused_bad_params);
+    RUN_TEST(test_start_refused_outside_fixed_point);
     RUN_TEST(test_stop_and_disarm_outputs);
     RUN_TEST(test_init_errors);
     RUN_TEST(test_state_names);
