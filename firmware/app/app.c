@@ -235,6 +235,22 @@ static uint32_t ms_to_ticks(uint32_t ms, uint32_t tick_hz)
     return t == 0 ? 1u : (t > UINT32_MAX ? UINT32_MAX : (uint32_t)t);
 }
 
+/* safety.host_timeout_ms in ticks, worked out again only when it or sys.tick_hz changed (a
+ * 64-bit division costs a core without a divider a few hundred instructions a tick) */
+static uint32_t host_timeout_ticks(pma_app_t *app)
+{
+    pma_app_timing_t *t = &app->timing;
+    const pma_params_t *p = &app->params;
+    if (!t->host_timeout_valid || t->host_timeout_ms != p->safety_host_timeout_ms ||
+        t->host_timeout_hz != p->sys_tick_hz) {
+        t->host_timeout_ms = p->safety_host_timeout_ms;
+        t->host_timeout_hz = p->sys_tick_hz;
+        t->host_timeout_ticks = ms_to_ticks(p->safety_host_timeout_ms, p->sys_tick_hz);
+        t->host_timeout_valid = 1;
+    }
+    return t->host_timeout_ticks;
+}
+
 void pma_app_core_tick(pma_app_t *app, uint32_t late_ticks)
 {
     pma_app_sync_bridge(app);
@@ -265,7 +281,7 @@ void pma_app_core_tick(pma_app_t *app, uint32_t late_ticks)
         .x_margin_cm = p->safety_x_margin_cm,
         .sensor_timeout_ticks = p->safety_sensor_timeout_ticks,
         .max_late_ticks = p->safety_max_late_ticks,
-        .host_timeout_ticks = ms_to_ticks(p->safety_host_timeout_ms, p->sys_tick_hz),
+        .host_timeout_ticks = host_timeout_ticks(app),
         .barrier_ticks = p->safety_barrier_ticks,
     };
     const pma_supervisor_input_t in = {

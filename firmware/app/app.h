@@ -207,6 +207,8 @@ typedef struct pma_app_timing {
     uint64_t next_recover_us;      /* bus-off: next recovery request */
     uint8_t heartbeat_counter;
     uint8_t tick_started;          /* the port's tick runs at period_us */
+    uint8_t host_timeout_valid;    /* host_timeout_ticks is safety.host_timeout_ms at host_timeout_hz */
+    uint32_t host_timeout_ms, host_timeout_hz, host_timeout_ticks;
 } pma_app_timing_t;
 
 /* This tick's position sample, from the ADC or the plant bridge. */

@@ -8,8 +8,8 @@
  * Runs in ADC mode and, for the tables, also in plant-bridge mode. */
 #include "app_test.h"
 
-/* 1,112 bytes on the host with the PPC's fallback MFAC beside the law (controller.h); the
- * Q16.16 slot adds its fixed-point copies of the signals and limits (1,176 bytes) */
+/* 1,120 bytes with the PPC's fallback MFAC beside the law (controller.h); the
+ * Q16.16 slot adds its fixed-point copies of the signals and limits (1,184 bytes) */
 #if PMA_CTRL_Q16
 _Static_assert(sizeof(pma_app_t) <= 1216u, "pma_app_t must stay small (Cortex-M0: 16 KB RAM)");
 #else

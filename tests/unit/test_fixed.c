@@ -1,5 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* Saturating fixed-point arithmetic and the tan / cos / sin approximations. */
+#include <string.h>
+
 #include "test_util.h"
 #include "pma/fixed.h"
 
@@ -57,6 +59,56 @@ static void test_conversions(void)
     assert_near(pma_q16_to_f32(Q16(-2.0)), -2.0, 0.0);
     TEST_ASSERT_EQUAL_INT(Q16(1.0), pma_q16_clamp(Q16(5.0), Q16(-1.0), Q16(1.0)));
     TEST_ASSERT_EQUAL_INT(PMA_Q16_MAX, pma_q16_sat64((int64_t)1 << 40));
+}
+
+/* The conversions work on the float's bits: the same results as the arithmetic definitions
+ * (lroundf(x 2^16) saturated, NaN 0; (float)a 2^-16), over every exponent with random
+ * significands and signs, and at the rounding ties and the saturation edges. */
+static pma_q16_t from_f32_by_definition(float x)
+{
+    if (isnan(x)) return 0;
+    const float scaled = x * 65536.0f;
+    if (scaled >= 2147483647.0f) return PMA_Q16_MAX;
+    if (scaled <= -2147483648.0f) return PMA_Q16_MIN;
+    return (pma_q16_t)lroundf(scaled);
+}
+
+static float bits_to_f32(uint32_t b)
+{
+    float f;
+    memcpy(&f, &b, sizeof f);
+    return f;
+}
+
+static void test_conversions_match_their_definitions(void)
+{
+    uint32_t s = 12345u;
+    for (uint32_t e = 0; e < 256u; ++e) {
+        for (int i = 0; i < 64; ++i) {
+            s = s * 1664525u + 1013904223u;
+            const uint32_t b = (s & 0x807FFFFFu) | (e << 23);
+            const float x = bits_to_f32(b);
+            if (pma_q16_from_f32(x) != from_f32_by_definition(x)) {
+                pma_test_fail("from_f32(bits 0x%08lx) = %ld, by definition %ld", (unsigned long)b,
+                              (long)pma_q16_from_f32(x), (long)from_f32_by_definition(x));
+            }
+        }
+    }
+    static const float edges[] = {0.5f / 65536.0f, 1.5f / 65536.0f, -2.5f / 65536.0f, 0.49999997f / 65536.0f,
+                                  32767.99998f, 32768.0f, -32768.0f, -32768.004f, 1e-30f, -0.0f};
+    for (size_t i = 0; i < sizeof edges / sizeof edges[0]; ++i) {
+        TEST_ASSERT_EQUAL_INT(from_f32_by_definition(edges[i]), pma_q16_from_f32(edges[i]));
+    }
+    const pma_q16_t as[] = {0, 1, -1, 12345, -98765, PMA_Q16_MAX, PMA_Q16_MIN, PMA_Q16_ONE};
+    for (size_t i = 0; i < sizeof as / sizeof as[0]; ++i) {
+        TEST_ASSERT_EQUAL_FLOAT((float)as[i] * (1.0f / 65536.0f), pma_q16_to_f32(as[i]));
+    }
+    for (int i = 0; i < 4096; ++i) {
+        s = s * 1664525u + 1013904223u;
+        const pma_q16_t a = (pma_q16_t)s;
+        const float want = (float)a * (1.0f / 65536.0f), got = pma_q16_to_f32(a);
+        TEST_ASSERT_EQUAL_MEMORY(&want, &got, sizeof want);
+    }
 }
 
 /* tan(pi r / 2): error <= 1 LSB + |tan| (2e-6 + 2^-31 / (1 - r^2)) over the
@@ -138,6 +190,7 @@ int main(void)
     RUN_TEST(test_smul_rounds_and_saturates);
     RUN_TEST(test_sdiv);
     RUN_TEST(test_conversions);
+    RUN_TEST(test_conversions_match_their_definitions);
     RUN_TEST(test_tan_halfpi_accuracy);
     RUN_TEST(test_tan_halfpi_monotone_exact);
     RUN_TEST(test_cos_sin_accuracy);
