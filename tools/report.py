@@ -208,7 +208,8 @@ def main() -> int:
     app = [p for p in APP_PRESETS if built(p)]
     if app:
         say("## Cost of a whole tick of the application (bench_app_tick)\n")
-        say("pma_app_step on the fake HAL (its own work is small: an ADC read about 30 instructions, a DAC write about 40), RUNNING a HOLD: sample and scaling, estimator, controller, "
+        say("pma_app_step on the fake HAL (its own work is small: an ADC read about 30 instructions, "
+            "a DAC write about 40), RUNNING a HOLD: sample and scaling, estimator, controller, "
             "supervisor, actuator and DAC, heartbeat and telemetry at their decimation. Instructions "
             "per tick (QEMU -icount); the arithmetic is the controller slot's.\n")
         got_ticks = {p: app_tick_lines(p) for p in app}
