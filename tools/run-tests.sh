@@ -144,14 +144,18 @@ vcan_integration() {
 }
 
 # The second guest, one after the other: the README main job's quick variant, the offline runs
-# against that lockstep run over vcan, to the last digit (and a fault), the tuning session of
-# docs/tuning.md, the lockstep benchmark (printed, never asserted).
+# against that lockstep run over vcan, to the last digit (and a fault), the Q16.16 build on the
+# same quick run, the tuning session of docs/tuning.md, the lockstep benchmark (printed, never
+# asserted).
 vcan_hil() {
   echo "-- the README's main job, quick variant (Case 3, first 30 s, each lane commissioned, PPC vs MFAC)"
   env OUT=build/hil/ci-quick bash tools/run-demo.sh --no-setup --quick --no-progress
   echo "-- offline == over CAN (that quick run, and a fault)"
   PMA_OFFLINE_COMPARE_RUN=build/hil/ci-quick hil/with-vcan .venv/bin/python -m pytest -q \
     hil/tests/test_offline_vs_hil.py
+  echo "-- the Q16.16 build (host-q16) on that quick Case 3, against the float build's run"
+  PMA_FLOAT_QUICK_RUN=build/hil/ci-quick hil/with-vcan .venv/bin/python -m pytest -q -s \
+    hil/tests/test_hil_fixed_point.py
   echo "-- docs/tuning.md's worked tuning session, pmactl against pma-fw-host over vcan"
   hil/with-vcan .venv/bin/python -m pytest -q host/tests/integration/test_tuning_session.py
   echo "-- HIL lockstep benchmark (printed, never asserted)"

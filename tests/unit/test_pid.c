@@ -94,7 +94,10 @@ static void test_invalid_and_bad_input(void)
     c = cfg(1.0f, 1.0f, 1.0f, 0.01f, 1.0f);
     c.u_min = c.u_max;
     TEST_ASSERT_EQUAL_INT(PMA_ERR_RANGE, pma_pid_init_f32(&p, &c));
-    c = cfg(1.0f, 5000.0f, 1.0f, 0.01f, 1.0f);    /* ki T = 5 does not fit Q2.30 */
+    c = cfg(1.0f, 5000.0f, 1.0f, 0.01f, 1.0f);    /* ki T = 5 fits Q8.24 */
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_pid_init_f32(&p, &c));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_pid_init_q16(&q, &c));
+    c = cfg(1.0f, 130000.0f, 1.0f, 0.01f, 1.0f);  /* ki T = 130 does not */
     TEST_ASSERT_EQUAL_INT(PMA_OK, pma_pid_init_f32(&p, &c));
     TEST_ASSERT_EQUAL_INT(PMA_ERR_FIXED_RANGE, pma_pid_init_q16(&q, &c));
     c = cfg(1.0f, 1.0f, 1.0f, 0.01f, 1.0f);

@@ -1,7 +1,8 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* PID baseline, fixed-point variant (see pma/pid.h). Signals and kp, kd/(tf+T)
- * in Q16.16; the filter pole tf/(tf+T), ki T and k_aw T in Q2.30 (so ki T and
- * k_aw T < 2); the integrator keeps 32 fractional bits so that the small
+ * in Q16.16; the filter pole tf/(tf+T) in Q2.30; ki T and k_aw T in Q8.24 (so
+ * ki T and k_aw T < 128: a stiff integrator on a fast tick, e.g. ki 10,000 per s
+ * at 1 kHz, fits); the integrator keeps 32 fractional bits so that the small
  * per-step increments of a slow integrator are not rounded away. */
 #include "pma/pid.h"
 #include "pma/status.h"
@@ -20,14 +21,14 @@ int pma_pid_init_q16(pma_pid_q16_t *s, const pma_pid_config_t *cfg)
     for (unsigned i = 0; i < sizeof vals / sizeof vals[0]; ++i) {
         PMA_CHECK(pma_check_q16_range(vals[i]));
     }
-    if (cfg->ki * cfg->period_s >= 2.0f || cfg->k_aw_per_s * cfg->period_s >= 2.0f) {
+    if (cfg->ki * cfg->period_s >= 128.0f || cfg->k_aw_per_s * cfg->period_s >= 128.0f) {
         return PMA_ERR_FIXED_RANGE;
     }
     s->kp = pma_to_q(cfg->kp, 16);
     s->d_a = pma_to_q(cfg->tf_s / (cfg->tf_s + cfg->period_s), 30);
     s->d_b = pma_to_q(d_b, 16);
-    s->ki_t = pma_to_q(cfg->ki * cfg->period_s, 30);
-    s->kaw_t = pma_to_q(cfg->k_aw_per_s * cfg->period_s, 30);
+    s->ki_t = pma_to_q(cfg->ki * cfg->period_s, 24);
+    s->kaw_t = pma_to_q(cfg->k_aw_per_s * cfg->period_s, 24);
     s->u_min = pma_to_q(cfg->u_min, 16);
     s->u_max = pma_to_q(cfg->u_max, 16);
     pma_pid_reset_q16(s);
@@ -66,9 +67,9 @@ int pma_pid_step_q16(pma_pid_q16_t *s, pma_q16_t r_cm, pma_q16_t y_cm, pma_q16_t
         out = s->u_min;
         flags |= PMA_PID_FLAG_SAT_LOW;
     }
-    /* I += T (ki e + k_aw (u - v)), Q16 x Q30 = Q46 -> Q32 */
-    int64_t iq = s->i_q32 + pma_rshift_round((int64_t)e * s->ki_t, 14) +
-                 pma_rshift_round((int64_t)pma_q16_ssub(out, v) * s->kaw_t, 14);
+    /* I += T (ki e + k_aw (u - v)), Q16 x Q24 = Q40 -> Q32 */
+    int64_t iq = s->i_q32 + pma_rshift_round((int64_t)e * s->ki_t, 8) +
+                 pma_rshift_round((int64_t)pma_q16_ssub(out, v) * s->kaw_t, 8);
     const int64_t lo = (int64_t)s->u_min * 65536, hi = (int64_t)s->u_max * 65536;
     s->i_q32 = iq < lo ? lo : (iq > hi ? hi : iq);
     s->d = d;

@@ -46,8 +46,8 @@ typedef struct pma_pid_q16 {
     pma_q16_t kp, u_min, u_max;
     pma_q30_t d_a;               /* tf/(tf+T) in [0,1] */
     pma_q16_t d_b;               /* kd/(tf+T) */
-    pma_q30_t ki_t;              /* ki T in Q2.30 (ki T < 2) */
-    pma_q30_t kaw_t;             /* k_aw T in Q2.30 (k_aw T < 2) */
+    int32_t ki_t;                /* ki T in Q8.24 (ki T < 128) */
+    int32_t kaw_t;               /* k_aw T in Q8.24 (k_aw T < 128) */
     int64_t i_q32;               /* integrator, 32 fractional bits: small increments are kept */
     pma_q16_t d, y1, p;
     uint32_t flags;
