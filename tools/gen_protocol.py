@@ -284,6 +284,9 @@ ENUM_TIES: dict[tuple[str, str], str] = {
     ("HEARTBEAT", "ResetCause"): "PMA_RESET_",
 }
 C_NAME_EXCEPTIONS = {("PMA_ERR_", "OK"): "PMA_OK"}
+# The DBC's value tables that no signal carries (VAL_TABLE_): name -> the prefix of the
+# firmware's C constants, tied the same way. StatusId: GET_STATUS's Ids (pmactl reads them).
+VALUE_TABLE_TIES: dict[str, str] = {"StatusId": "PMA_STATUS_"}
 
 # The parameters whose values (params.toml "values") are a C enum of the firmware's other than
 # the param table's own PMA_<NAME>_<VALUE> macros: parameter -> the prefix of that enum's
@@ -315,6 +318,12 @@ def gen_enum_ties() -> str:
             raise TableError(f"{message}.{signal} has no VAL_ table to tie to {prefix}*")
         table = tuple(sorted((int(v), str(label)) for v, label in sig.choices.items()))
         blocks.setdefault((prefix, table), []).append(f"{message}.{signal}")
+    tables = db.dbc.value_tables if db.dbc is not None else {}
+    for name, prefix in VALUE_TABLE_TIES.items():
+        if not tables.get(name):
+            raise TableError(f"the DBC has no value table {name} to tie to {prefix}*")
+        table = tuple(sorted((int(v), str(label)) for v, label in tables[name].items()))
+        blocks.setdefault((prefix, table), []).append(f"value table {name}")
     for (prefix, table), signals in blocks.items():
         out.append(f"\n/* {', '.join(signals)} */\n")
         for value, label in table:

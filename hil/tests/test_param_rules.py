@@ -3,7 +3,7 @@
 itself. A rig with an 11-bit ADC puts adc.raw_min_counts (3.8 mA) below the default
 wire-break level 737: the harness must set adc.wire_break_below_counts first (rule 3), and
 the scenario check must refuse a set the node would refuse. No CAN: the node's rules are
-pmactl.rules (the same numbers as firmware/app/app.c; tests/protocol/test_rules_doc.py
+pmactl.rules (the same numbers as firmware/app/app_config.c; tests/protocol/test_rules_doc.py
 ties those to params.toml)."""
 from __future__ import annotations
 

@@ -26,8 +26,7 @@ STATE = {v: k for k, v in PROTO.state_names.items()}
 FAULT = {v: k for k, v in PROTO.fault_names.items()}
 RESULT = {v: k for k, v in PROTO.status_names.items()}
 CMD = dict(PROTO.commands)
-OPS = {"GET": 0, "SET": 1, "SAVE": 2, "RESTORE_DEFAULTS": 3, "GET_MIN": 4, "GET_MAX": 5,
-       "GET_DEFAULT": 6, "NEXT_ID": 7, "LOAD": 8}
+OPS = dict(PROTO.param_ops)
 TYPE = {"f32": 0, "u32": 1, "i32": 2}
 VALUE_SIG = {0: "ValueF32", 1: "ValueU32", 2: "ValueI32"}
 
@@ -81,6 +80,11 @@ class FakeNode:
     info_length: int = 8                      # DLC of the DEVICE_INFO frames it sends
     motion: str = "approach"         # telemetry: "approach" (x settles on x_r) or "sine" (x_r a 2 s sine)
     restarts: bool = True            # RESTART works (False: UNKNOWN_COMMAND, as protocol < 4)
+    # GET_STATUS's values by name (the DBC's StatusId); None: GET_STATUS unknown (an old node)
+    status_values: dict[str, int] | None = field(default_factory=lambda: {
+        "LAST_RULE": 0, "RX_OVERRUNS": 0, "RX_DEFERRED": 0, "RX_DROPPED": 0, "FRAMES_BAD": 0,
+        "TICKS": 1234, "FRAMES_RX": 56, "GUARANTEE_LOST_TICKS": 0, "GUARANTEE_LOST_AT_MS": 0xFFFFFFFF,
+        "BARRIER_BREACHES": 0})
 
     def __post_init__(self) -> None:
         self.rows: dict[int, Row] = {}
@@ -374,6 +378,13 @@ class FakeNode:
             res, value = self._set(pid, t, sig.get(VALUE_SIG.get(t, ""), 0))
             if row is not None:
                 rtype = row.type
+        elif op == OPS["GET_STATUS"] and self.status_values is not None:
+            rtype = 1
+            names = {v: k for k, v in PROTO.status_ids.items()}
+            if pid in names and names[pid] in self.status_values:
+                value = self.status_values[names[pid]]
+            else:
+                res = RESULT["UNKNOWN_ID"]
         elif op == OPS["NEXT_ID"]:
             rtype = 1
             later = sorted(i for i in self.rows if i > pid)

@@ -130,6 +130,39 @@ def test_status_decodes_everything(pmactl, fake) -> None:
     assert "reset cause  POWER_ON (1)" in r.out
 
 
+# ---------------------------------------------------------------------- counters --
+def test_counters_reads_every_status_value_by_name(pmactl, fake) -> None:
+    n = fake(status_values={"LAST_RULE": 12, "RX_OVERRUNS": 0, "RX_DEFERRED": 0, "RX_DROPPED": 3,
+                            "FRAMES_BAD": 0, "TICKS": 98765, "FRAMES_RX": 56, "GUARANTEE_LOST_TICKS": 77,
+                            "GUARANTEE_LOST_AT_MS": 4321, "BARRIER_BREACHES": 5})
+    r = pmactl("counters")
+    assert r.code == EXIT_OK, r.err
+    rows = {line.split()[0]: line.split(None, 1)[1] for line in r.out.splitlines() if line.strip()}
+    assert list(rows) == ["LAST_RULE", "RX_OVERRUNS", "RX_DEFERRED", "RX_DROPPED", "FRAMES_BAD", "TICKS",
+                          "FRAMES_RX", "GUARANTEE_LOST_TICKS", "GUARANTEE_LOST_AT_MS", "BARRIER_BREACHES"]
+    assert rows["TICKS"] == "98765" and rows["RX_DROPPED"] == "3"
+    assert rows["LAST_RULE"].startswith("rule 12")
+    assert rows["GUARANTEE_LOST_TICKS"] == "77" and rows["GUARANTEE_LOST_AT_MS"] == "4321 ms after START"
+    n.status_values["GUARANTEE_LOST_AT_MS"] = 0xFFFFFFFF
+    r = pmactl("counters", "guarantee_lost_at_ms", "TICKS")
+    assert r.code == EXIT_OK
+    assert r.out.split() == ["GUARANTEE_LOST_AT_MS", "never", "(the", "guarantee", "holds)", "TICKS", "98765"]
+
+
+def test_counters_refuses_an_unknown_name_before_sending(pmactl, fake) -> None:
+    n = fake()
+    before = sum(1 for name, _ in n.received if name == "PARAM_REQ")
+    r = pmactl("counters", "TICKS", "NO_SUCH_COUNTER")
+    assert r.code == EXIT_USAGE and "no status value NO_SUCH_COUNTER" in r.err
+    assert sum(1 for name, _ in n.received if name == "PARAM_REQ") == before
+
+
+def test_counters_of_a_node_without_get_status(pmactl, fake) -> None:
+    fake(status_values=None)            # firmware before GET_STATUS: UNKNOWN_COMMAND
+    r = pmactl("counters", "TICKS")
+    assert r.code == EXIT_REFUSED and "UNKNOWN_COMMAND" in r.err
+
+
 # ------------------------------------------------------------------------ params --
 def test_params_list_shows_what_the_node_reports(pmactl, fake) -> None:
     fake(overrides={"ppc.w1_cm": {"max": 50.0}})            # the node's range, not the table's

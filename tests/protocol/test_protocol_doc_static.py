@@ -143,6 +143,19 @@ def test_value_tables(db, doc, heading: str, message: str, signal: str) -> None:
             assert int(dx.unquote(r[1]), 16) == int(r[0]) & 0xFF, f"byte of {r[2]}"
 
 
+def test_status_values_table(db, doc) -> None:
+    """The Status values table is the DBC's value table StatusId (which the firmware's
+    PMA_STATUS_* are tied to, and pmactl counters reads by name), and every PMA_STATUS_ of
+    app.h is in it."""
+    rows = dx.tables_after(doc, r"^Status values$")[0]
+    got = {int(r[0]): dx.unquote(r[1]) for r in rows}
+    table = {int(k): str(v) for k, v in db.dbc.value_tables["StatusId"].items()}
+    assert got == table
+    src = APP_H.read_text()
+    in_c = {m.group(1): int(m.group(2)) for m in re.finditer(r"PMA_STATUS_(\w+)\s*=\s*(\d+)", src)}
+    assert in_c == {v: k for k, v in table.items()}
+
+
 def test_heartbeat_flag_table(doc) -> None:
     src = APP_H.read_text()
     flags = {m.group(1): int(m.group(2), 16)

@@ -25,7 +25,7 @@ def test_rule_numbers_are_the_c_enum() -> None:
 
 
 def test_set_rules_are_the_ones_checked_at_set() -> None:
-    src = (REPO / "firmware/app/app.c").read_text()
+    src = (REPO / "firmware/app/app_config.c").read_text()
     body = src[src.index("int pma_app_param_rule("):]
     body = body[:body.index("\n}\n")]
     at_set, at_arm = body.split("if (set_only) return PMA_RULE_NONE;")

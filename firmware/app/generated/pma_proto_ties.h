@@ -117,6 +117,18 @@ _Static_assert(PMA_RESET_SOFTWARE == 3, "HEARTBEAT.ResetCause SOFTWARE is 3 in t
 _Static_assert(PMA_RESET_PIN == 4, "HEARTBEAT.ResetCause PIN is 4 in the DBC");
 _Static_assert(PMA_RESET_BROWNOUT == 5, "HEARTBEAT.ResetCause BROWNOUT is 5 in the DBC");
 
+/* value table StatusId */
+_Static_assert(PMA_STATUS_LAST_RULE == 1, "value table StatusId LAST_RULE is 1 in the DBC");
+_Static_assert(PMA_STATUS_RX_OVERRUNS == 2, "value table StatusId RX_OVERRUNS is 2 in the DBC");
+_Static_assert(PMA_STATUS_RX_DEFERRED == 3, "value table StatusId RX_DEFERRED is 3 in the DBC");
+_Static_assert(PMA_STATUS_RX_DROPPED == 4, "value table StatusId RX_DROPPED is 4 in the DBC");
+_Static_assert(PMA_STATUS_FRAMES_BAD == 5, "value table StatusId FRAMES_BAD is 5 in the DBC");
+_Static_assert(PMA_STATUS_TICKS == 6, "value table StatusId TICKS is 6 in the DBC");
+_Static_assert(PMA_STATUS_FRAMES_RX == 7, "value table StatusId FRAMES_RX is 7 in the DBC");
+_Static_assert(PMA_STATUS_GUARANTEE_LOST_TICKS == 8, "value table StatusId GUARANTEE_LOST_TICKS is 8 in the DBC");
+_Static_assert(PMA_STATUS_GUARANTEE_LOST_AT_MS == 9, "value table StatusId GUARANTEE_LOST_AT_MS is 9 in the DBC");
+_Static_assert(PMA_STATUS_BARRIER_BREACHES == 10, "value table StatusId BARRIER_BREACHES is 10 in the DBC");
+
 /* parameter ref.kind: the param table's PMA_REF_KIND_* and the firmware's PMA_REF_* */
 _Static_assert(PMA_REF_HOLD == 0 && PMA_REF_KIND_HOLD == 0u, "ref.kind HOLD is 0 in params.toml");
 _Static_assert(PMA_REF_STEP == 1 && PMA_REF_KIND_STEP == 1u, "ref.kind STEP is 1 in params.toml");

@@ -195,6 +195,11 @@ def build_parser() -> argparse.ArgumentParser:
                   "its identity")
     add("info", "the node's identity (DEVICE_INFO): firmware version and commit, build target, "
                 "protocol version, parameter table, unique device id")
+    p = add("counters", "the node's counters and status values (GET_STATUS) by name: the last rule "
+                        "that refused, frames lost, dropped or bad, ticks, and the PPC's lost "
+                        "guarantee (lost ticks, when it was first lost) and barrier clamps")
+    p.add_argument("names", nargs="*", metavar="NAME",
+                   help="only these (e.g. GUARANTEE_LOST_TICKS; case does not matter)")
 
     p = add("params", "read, write, save and restore parameters")
     psub = p.add_subparsers(dest="params_command", metavar="ACTION", required=True)
@@ -511,6 +516,30 @@ def cmd_status(s: Session) -> int:
     for line in _identity_lines(dev):
         s.out(line)
     return EXIT_REFUSED if dev.problems else EXIT_OK
+
+
+# how a status value reads (docs/protocol.md, "Status values"): the others are plain counts
+NO_VALUE = 0xFFFFFFFF
+
+
+def _status_text(name: str, value: int) -> str:
+    if name == "GUARANTEE_LOST_AT_MS":
+        return "never (the guarantee holds)" if value == NO_VALUE else f"{value} ms after START"
+    if name == "LAST_RULE":
+        return "none" if value == 0 else f"rule {value} (docs/parameters.md, rules between parameters)"
+    return str(value)
+
+
+def cmd_counters(s: Session) -> int:
+    known = s.proto.status_ids
+    names = [n.upper() for n in s.args.names] or sorted(known, key=lambda n: known[n])
+    unknown = [n for n in names if n not in known]
+    if unknown:
+        raise UsageError(f"no status value {', '.join(unknown)} (known: {', '.join(known)})")
+    width = max(len(n) for n in names)
+    for name in names:
+        s.out(f"  {name:<{width}}  {_status_text(name, s.node.status_value(name))}")
+    return EXIT_OK
 
 
 def _matches(name: str, patterns: list[str]) -> bool:
@@ -976,7 +1005,7 @@ PARAMS_COMMANDS: dict[str, Callable[[Session], int]] = {
     "dump": cmd_params_dump, "load": cmd_params_load,
 }
 COMMANDS: dict[str, Callable[[Session], int]] = {
-    "scan": cmd_scan, "status": cmd_status, "info": cmd_info,
+    "scan": cmd_scan, "status": cmd_status, "info": cmd_info, "counters": cmd_counters,
     "params": lambda s: PARAMS_COMMANDS[s.args.params_command](s),
     "arm": cmd_command, "disarm": cmd_command, "start": cmd_command, "stop": cmd_command,
     "clear-faults": cmd_command, "estop": cmd_estop, "restart": cmd_restart, "controller": cmd_select,

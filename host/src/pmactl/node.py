@@ -19,8 +19,7 @@ from pmactl.protocol import Param, Protocol, load_protocol
 TYPE_CODES = {"f32": 0, "u32": 1, "i32": 2}
 TYPE_SIGNALS = {0: "ValueF32", 1: "ValueU32", 2: "ValueI32"}
 TYPE_NAMES = {v: k for k, v in TYPE_CODES.items()}
-OPS = {"GET": 0, "SET": 1, "SAVE": 2, "RESTORE_DEFAULTS": 3, "GET_MIN": 4, "GET_MAX": 5,
-       "GET_DEFAULT": 6, "NEXT_ID": 7, "LOAD": 8}
+OPS: dict[str, int] = load_protocol().param_ops   # PARAM_REQ's Op names, from the packaged DBC
 
 HOST_HEARTBEAT_PERIOD_S = 0.1       # 10 Hz, well inside the default safety.host_timeout_ms (500 ms)
 
@@ -281,7 +280,7 @@ class PmaNode:
     # -------------------------------------------------------- parameters --
     def param_request(self, op: str | int, pid: int = 0, type_code: int = 0,
                       value: float | int = 0) -> ParamReply:
-        opc = OPS[op] if isinstance(op, str) else int(op)
+        opc = self.proto.param_ops[op] if isinstance(op, str) else int(op)
         data = {"Op": opc, "Type": type_code, "Id": pid, "Reserved": 0, TYPE_SIGNALS[type_code]: value}
         self.send("PARAM_REQ", data)
         sig = self.wait_for("PARAM_RESP", lambda s: s["Op"] == opc and s["Id"] == pid)
@@ -296,6 +295,25 @@ class PmaNode:
     def get(self, key: str | int) -> float | int:
         p = self.proto.param(key)
         return self._checked(f"get {p.name}", self.param_request("GET", p.id, TYPE_CODES[p.type])).value
+
+    def status_value(self, key: str | int) -> int:
+        """One of the node's counters or status values (GET_STATUS) by name (the DBC's value
+        table StatusId, e.g. "GUARANTEE_LOST_TICKS") or Id; PmaError UNKNOWN_ID from a node
+        that does not have it."""
+        if isinstance(key, str) and not key.isdigit():
+            name = key.upper()
+            if name not in self.proto.status_ids:
+                raise KeyError(f"no status value {key!r}; known: {', '.join(self.proto.status_ids)}")
+            sid = self.proto.status_ids[name]
+        else:
+            sid = int(key)
+        r = self._checked(f"status {key}", self.param_request("GET_STATUS", sid, TYPE_CODES["u32"]))
+        return int(r.value)
+
+    def status_values(self) -> dict[str, int]:
+        """Every status value the DBC names, read from the node (in Id order)."""
+        return {name: self.status_value(sid)
+                for name, sid in sorted(self.proto.status_ids.items(), key=lambda kv: kv[1])}
 
     def set(self, key: str | int, value: float | int) -> float | int:
         """Sets a parameter in the node's RAM; returns the value it now has.

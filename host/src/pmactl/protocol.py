@@ -200,6 +200,10 @@ class Protocol:
         self.fault_names: dict[int, str] = self._choices("HEARTBEAT", "FaultCode")
         self.state_names: dict[int, str] = self._choices("HEARTBEAT", "State")
         self.commands: dict[str, int] = {v: k for k, v in self._choices("COMMAND", "Command").items()}
+        self.param_ops: dict[str, int] = {v: k for k, v in self._choices("PARAM_REQ", "Op").items()}
+        # GET_STATUS's Ids: the DBC's value table StatusId (tied to the firmware's PMA_STATUS_*)
+        tables = self.db.dbc.value_tables if self.db.dbc is not None else {}
+        self.status_ids: dict[str, int] = {str(v): int(k) for k, v in tables.get("StatusId", {}).items()}
 
     @property
     def version(self) -> str:

@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: Apache-2.0
 """The rules between parameters (docs/parameters.md "Rules between parameters";
-firmware/app/app.c pma_app_param_rule, the same numbers), for clients that set many
+firmware/app/app_config.c pma_app_param_rule, the same numbers), for clients that set many
 parameters: check a whole set before sending it, and find an order of SETs in which
 every step keeps the rules a SET enforces (rules 1-5: the sensor and DAC scalings)."""
 from __future__ import annotations

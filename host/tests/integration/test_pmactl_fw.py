@@ -102,6 +102,24 @@ def test_scan_status_and_parameters(firmware, pmactl, tmp_path: Path) -> None:
     assert pmactl("params", "get", "ppc.t_u_s", node=3).out.strip() == "ppc.t_u_s = 6 s"
 
 
+def test_counters(firmware, pmactl) -> None:
+    """pmactl counters: every GET_STATUS value by its DBC name, from the firmware."""
+    firmware(node=3)
+    r = pmactl("counters", node=3)
+    assert r.code == 0, r.err
+    rows = {line.split()[0]: line.split(None, 1)[1] for line in r.out.splitlines() if line.strip()}
+    assert list(rows) == list(PROTO.status_ids)
+    assert rows["LAST_RULE"] == "none"
+    assert rows["TICKS"] == "0"                      # lockstep, and no sample yet
+    assert rows["GUARANTEE_LOST_AT_MS"].startswith("never")
+    assert int(rows["FRAMES_RX"]) > 0
+    # a SET that a rule refuses: LAST_RULE names it
+    r = pmactl("params", "set", "adc.raw_min_counts", "4095", node=3)
+    assert r.code == 1
+    r = pmactl("counters", "last_rule", node=3)
+    assert r.code == 0 and r.out.split()[:2] == ["LAST_RULE", "rule"], r.out
+
+
 def test_errors_without_a_node(firmware, pmactl) -> None:
     firmware(node=0)
     r = pmactl("status", node=9, reply_timeout_s=2)
