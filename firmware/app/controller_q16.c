@@ -99,6 +99,9 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
     if (s == NULL || u == NULL) return PMA_ERR_NULL;
     *u = 0.0f;
     if (!isfinite(t_s) || !isfinite(x_cm)) return PMA_ERR_NOT_FINITE;
+    /* Q16.16 time ends at 32767 s (9.1 h): past it the step refuses, and the supervisor
+     * faults CONTROLLER (the output goes safe), rather than the reference freezing */
+    if (!(t_s < 32767.0f)) return PMA_ERR_FIXED_RANGE;
     pma_ctrl_out_q16_t *o = &s->q_out;
     const pma_q16_t t = pma_q16_from_f32(t_s);
     const pma_q16_t x = pma_q16_from_f32(x_cm);

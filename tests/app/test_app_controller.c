@@ -200,6 +200,22 @@ static void test_ref_ff_adds_the_maps_input_for_the_reference_ahead(void)
     TEST_ASSERT_EQUAL_INT(PMA_ERR_RANGE, pma_ctrl_start(&ctl_on, &par, PERIOD_S));
 }
 
+/* Q16.16 time ends at 32767 s: the Q16.16 slot refuses a step past it (the application then
+ * faults CONTROLLER); float goes on. */
+static void test_time_beyond_the_fixed_point_range(void)
+{
+    pma_params_defaults(&par);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ctrl_start(&ctl_on, &par, PERIOD_S));
+    float u;
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ctrl_step(&ctl_on, 32766.0f, OFFSET_CM, 0.0f, &u));
+#if PMA_CTRL_Q16
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_FIXED_RANGE, pma_ctrl_step(&ctl_on, 32767.0f, OFFSET_CM, 0.0f, &u));
+#else
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ctrl_step(&ctl_on, 32767.0f, OFFSET_CM, 0.0f, &u));
+#endif
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_NOT_FINITE, pma_ctrl_step(&ctl_on, 1.0f, NAN, 0.0f, &u));
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -208,5 +224,6 @@ int main(void)
     RUN_TEST(test_ref_vel_damps_the_velocity_error);
     RUN_TEST(test_obs_pos_takes_the_error_from_the_observer);
     RUN_TEST(test_ref_ff_adds_the_maps_input_for_the_reference_ahead);
+    RUN_TEST(test_time_beyond_the_fixed_point_range);
     return UNITY_END();
 }
