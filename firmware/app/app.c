@@ -262,7 +262,11 @@ void pma_app_core_tick(pma_app_t *app, uint32_t late_ticks)
     if (app->state == PMA_STATE_RUNNING) {
         if (app->timing.ticks_since_host_heartbeat != UINT32_MAX) ++app->timing.ticks_since_host_heartbeat;
         if (app->sensor.status == PMA_OK) {
-            const float t_s = (float)app->timing.run_ticks * app->timing.period_s;
+            /* the same float either way; the 32-bit conversion is one instruction with an FPU
+             * and a short call without, the 64-bit one a long call (49.7 days at 1 kHz) */
+            const uint64_t k = app->timing.run_ticks;
+            const float ticks = k <= UINT32_MAX ? (float)(uint32_t)k : (float)k;
+            const float t_s = ticks * app->timing.period_s;
             float u = 0.0f;
             ctrl_error = (uint8_t)(pma_ctrl_step(&app->ctrl, t_s, app->sensor.x_cm,
                                                  app->params.ctrl_openloop_u, &u) != PMA_OK);
