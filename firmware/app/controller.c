@@ -99,6 +99,17 @@ int pma_ctrl_start(pma_ctrl_t *s, const pma_params_t *p, float period_s)
     return pma_ctrl_init_arith(s, &su);
 }
 
+void pma_ctrl_monitor(pma_ctrl_t *s, float t_s, int outside_w1, uint8_t barrier)
+{
+    s->barrier_run = barrier ? s->barrier_run + 1u : 0u;
+    const int clamp_run = s->barrier_ticks != 0 && s->barrier_run >= s->barrier_ticks;
+    if (!outside_w1 && !clamp_run) return;
+    if (!s->lost) s->lost_at_s = t_s;
+    s->lost = 1;
+    if (s->lost_ticks != UINT32_MAX) ++s->lost_ticks;
+    if (s->fallback_mode) s->fallback_active = 1;
+}
+
 int pma_ctrl_stream(pma_ctrl_t *s, float target_cm, float x_min_cm, float x_max_cm)
 {
     if (s == NULL) return PMA_ERR_NULL;

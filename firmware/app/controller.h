@@ -106,6 +106,10 @@ typedef struct pma_ctrl_setup {
 /* The arithmetic's part of START: the instances from su (s's fields from the parameters
  * are set); PMA_ERR_FIXED_RANGE when a value does not fit Q16.16. */
 int pma_ctrl_init_arith(pma_ctrl_t *s, const pma_ctrl_setup_t *su);
+/* The PPC's guarantee monitor for one step, in either arithmetic (see below): outside_w1 is
+ * t >= t_u and |e| >= w1, barrier a clamp of the law this step; it counts the clamp run and
+ * the lost ticks, latches `lost` with `lost_at_s` [s] and, with the fallback, hands over. */
+void pma_ctrl_monitor(pma_ctrl_t *s, float t_s, int outside_w1, uint8_t barrier);
 /* The arithmetic's part of pma_ctrl_stream, after the band check. */
 int pma_ctrl_stream_arith(pma_ctrl_t *s, float target_cm);
 

@@ -140,14 +140,7 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
             o->internal2 = s->c.ppc.out.lambda2_cm_s;
             barrier = (uint8_t)((flags & (PMA_PPC_FLAG_BARRIER1 | PMA_PPC_FLAG_BARRIER2)) != 0);
         }
-        s->barrier_run = barrier ? s->barrier_run + 1u : 0u;
-        const int clamp_run = s->barrier_ticks != 0 && s->barrier_run >= s->barrier_ticks;
-        if ((t >= s->q_t_u_s && q16_abs(o->e_cm) >= s->q_w1_cm) || clamp_run) {
-            if (!s->lost) s->lost_at_s = t_s;
-            s->lost = 1;
-            if (s->lost_ticks != UINT32_MAX) ++s->lost_ticks;
-            if (s->fallback_mode) s->fallback_active = 1;
-        }
+        pma_ctrl_monitor(s, t_s, t >= s->q_t_u_s && q16_abs(o->e_cm) >= s->q_w1_cm, barrier);
         if (s->fallback_active) {
             out = u_mfac;
             flags = s->shadow.flags | PMA_CTRL_FLAG_FALLBACK;

@@ -17,6 +17,7 @@
 #include <string.h>
 
 #include "app.h"
+#include "app_core.h"
 #include "generated/pma_param_table.h"
 #include "pma/hal.h"
 #include "pma_board.h"
@@ -65,12 +66,8 @@ static const char *start(uint32_t mode, float t_u_s)
                                      .store_first_block = 0, .store_blocks_per_slot = 0,
                                      .watchdog_ms = 0};
     pma_params_defaults(&app.params);
-    const pma_adc_scaling_t s = {
-        .offset_cm = app.params.adc_offset_cm, .gain_cm_per_count = app.params.adc_gain_cm_per_count,
-        .raw_min_counts = (uint16_t)app.params.adc_raw_min_counts,
-        .raw_max_counts = (uint16_t)app.params.adc_raw_max_counts,
-        .wire_break_below_counts = (uint16_t)app.params.adc_wire_break_below_counts,
-    };
+    pma_adc_scaling_t s;
+    pma_app_adc_scaling(&app.params, &s);   /* the application's own builder */
     uint16_t raw = 0;
     if (pma_adc_cm_to_counts(&s, -1.52f, &raw) != PMA_OK) return "sensor counts";
     pma_fake_adc_set(raw);
