@@ -150,6 +150,10 @@ def summarise(sc: Scenario, lanes: list[LaneResult], *, quick: bool, duration_s:
         # the PPC's guarantee monitor, from TELEM_E's CtrlFlags (docs/controllers.md)
         info["guarantee_lost_at_s"] = first_flag_time(telem, CTRL_FLAG_GUARANTEE_LOST)
         info["fallback_at_s"] = first_flag_time(telem, CTRL_FLAG_FALLBACK)
+        # ppc.fallback WIDEN: the first sample with a funnel wider than assigned (the flag lasts
+        # t_u, so the telemetry's decimation cannot miss it as it could the one-tick WIDEN1/2)
+        info["funnel_wide_at_s"] = (first_flag_time(telem, PPC_FLAG_WIDE)
+                                    if lane.ctrl.mode == "PPC" else None)
         summary["rmste"][label] = m.rmste_cm
         summary["max_abs_error_after_tu"][label] = m.max_abs_error_after_tu_cm
         summary["constraint_violations"][label] = m.constraint_violations
@@ -173,6 +177,8 @@ def summarise(sc: Scenario, lanes: list[LaneResult], *, quick: bool, duration_s:
 # (PMA_CTRL_FLAG_* in firmware/app/controller.h; hil/tests/test_summary_flags.py checks them).
 CTRL_FLAG_GUARANTEE_LOST = 0x4000
 CTRL_FLAG_FALLBACK = 0x8000
+# the paper's law's own flag for a widened funnel (PMA_PPC_FLAG_WIDE in pma/ppc.h)
+PPC_FLAG_WIDE = 0x0100
 
 
 def first_flag_time(telem: dict[str, np.ndarray], bit: int) -> float | None:

@@ -122,8 +122,11 @@ def app_memory(preset: str) -> dict[str, int] | None:
 
 
 def code_sizes(preset: str) -> dict[str, int]:
-    objdir = ROOT / "build" / preset / "firmware/control/CMakeFiles/pma_control.dir/src"
-    objs = sorted(objdir.glob("*.obj")) or sorted(objdir.glob("*.o"))
+    # the control library and the base library below it (the status names)
+    objs = []
+    for lib in ("control/CMakeFiles/pma_control.dir", "common/CMakeFiles/pma_common.dir"):
+        objdir = ROOT / "build" / preset / "firmware" / lib / "src"
+        objs += sorted(objdir.glob("*.obj")) or sorted(objdir.glob("*.o"))
     if not objs:
         return {}
     out = run(["arm-none-eabi-size", *map(str, objs)])

@@ -299,8 +299,9 @@ void pma_app_core_tick(pma_app_t *app, uint32_t late_ticks)
         .ticks_since_host_heartbeat = app->timing.ticks_since_host_heartbeat,
         .controller_error = ctrl_error,
         .u = app->output.u,
-        /* the law's clamp run; none once MFAC is in charge (the run that hands over) */
-        .barrier_run = app->ctrl.fallback_active ? 0u : app->ctrl.barrier_run,
+        /* the law's clamp run faults only without a fallback: with MFAC the run hands over in
+         * the same tick, and WIDEN keeps the law in charge (docs/controllers.md) */
+        .barrier_run = app->ctrl.fallback_mode == PMA_PPC_FALLBACK_NONE ? app->ctrl.barrier_run : 0u,
     };
     const pma_fault_t f = pma_supervisor_check(&lim, &in);
     if (f != PMA_FAULT_NONE) pma_app_raise_fault(app, f); /* safe output below, this tick */

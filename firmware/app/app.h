@@ -82,7 +82,7 @@ typedef enum pma_param_op {
 #define PMA_HB_REF_ACTIVE      0x0080u
 #define PMA_HB_SAVE_FAILED     0x0100u /* the last SAVE failed */
 #define PMA_HB_GUARANTEE_LOST  0x0200u /* PPC: the guarantee was lost since START (controller.h) */
-#define PMA_HB_FALLBACK        0x0400u /* PPC: MFAC is in charge (ppc.fallback 1) */
+#define PMA_HB_FALLBACK        0x0400u /* PPC: MFAC is in charge (ppc.fallback MFAC or WIDEN) */
 
 /* pma_app_t.tx_due: the frames a tick or poll of the core has to send (the step
  * has the frames adapter send them). */

@@ -61,13 +61,14 @@ int pma_ctrl_start(pma_ctrl_t *s, const pma_params_t *p, float period_s)
         c->ff_gain_per_s = p->ppc_ff_gain_per_s;
         c->ff_init = p->ppc_ff_init;
         c->period_s = period_s;
+        s->fallback_mode = (uint8_t)p->ppc_fallback;
+        c->widen_r = s->fallback_mode == PMA_PPC_FALLBACK_WIDEN ? p->ppc_widen_r : 0.0f;
         c->band_enabled = (uint8_t)(p->ppc_band_check != 0);
         c->k_low_cm = p->safety_x_min_cm;
         c->k_high_cm = p->safety_x_max_cm;
         s->w1_cm = c->w1_cm;
         s->t_u_s = c->t_u_s;
         s->barrier_ticks = p->safety_barrier_ticks;
-        s->fallback_mode = (uint8_t)(p->ppc_fallback != 0);
         /* the fallback's MFAC starts from the law's feedforward */
         su.mfac = (pma_mfac_config_t){
             .eta = p->mfac_eta, .mu = p->mfac_mu, .rho = p->mfac_rho, .lambda = p->mfac_lambda,
@@ -99,15 +100,29 @@ int pma_ctrl_start(pma_ctrl_t *s, const pma_params_t *p, float period_s)
     return pma_ctrl_init_arith(s, &su);
 }
 
-void pma_ctrl_monitor(pma_ctrl_t *s, float t_s, int outside_w1, uint8_t barrier)
+void pma_ctrl_monitor(pma_ctrl_t *s, float t_s, int outside_w1, uint32_t law_flags)
 {
+    const uint8_t barrier = (law_flags & (PMA_PPC_FLAG_BARRIER1 | PMA_PPC_FLAG_BARRIER2)) != 0;
+    const int widened = (law_flags & (PMA_PPC_FLAG_WIDEN1 | PMA_PPC_FLAG_WIDEN2)) != 0;
     s->barrier_run = barrier ? s->barrier_run + 1u : 0u;
     const int clamp_run = s->barrier_ticks != 0 && s->barrier_run >= s->barrier_ticks;
-    if (!outside_w1 && !clamp_run) return;
+    if (!outside_w1 && !clamp_run && !widened) return;
     if (!s->lost) s->lost_at_s = t_s;
     s->lost = 1;
     if (s->lost_ticks != UINT32_MAX) ++s->lost_ticks;
-    if (s->fallback_mode) s->fallback_active = 1;
+    int hand_over = s->fallback_mode == PMA_PPC_FALLBACK_MFAC;
+    if (s->fallback_mode == PMA_PPC_FALLBACK_WIDEN) {
+        /* WIDEN: one widening of the position funnel is a transient the law recovers from; a
+         * second within t_u of the last (or a lasting clamp) is a task the law cannot hold
+         * here, and MFAC takes over (docs/controllers.md, "When the guarantee is lost") */
+        if (law_flags & PMA_PPC_FLAG_WIDEN1) {
+            if (s->widen1_count != 0 && t_s - s->widen1_at_s < s->t_u_s) hand_over = 1;
+            s->widen1_at_s = t_s;
+            if (s->widen1_count != UINT32_MAX) ++s->widen1_count;
+        }
+        if (clamp_run) hand_over = 1;
+    }
+    if (hand_over) s->fallback_active = 1;
 }
 
 int pma_ctrl_stream(pma_ctrl_t *s, float target_cm, float x_min_cm, float x_max_cm)

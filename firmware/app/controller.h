@@ -16,10 +16,10 @@
 #include "pma/ref.h"
 #include "pma/velest.h"
 
-/* Bits of pma_ctrl_out_t.flags above the control laws' own PMA_*_FLAG_* (bits 0-5); they
+/* Bits of pma_ctrl_out_t.flags above the control laws' own PMA_*_FLAG_* (bits 0-8); they
  * travel in TELEM_E CtrlFlags. */
 #define PMA_CTRL_FLAG_GUARANTEE_LOST 0x4000u /* PPC: the guarantee was lost since START (latched) */
-#define PMA_CTRL_FLAG_FALLBACK       0x8000u /* PPC: MFAC is in charge (ppc.fallback 1) */
+#define PMA_CTRL_FLAG_FALLBACK       0x8000u /* PPC: MFAC is in charge (ppc.fallback MFAC or WIDEN) */
 
 typedef struct pma_ctrl_out {
     float t_s;              /* control time since START */
@@ -80,7 +80,7 @@ typedef struct pma_ctrl {
     float ref_ff_lead_s;    /* ppc.ref_ff_lead_s: how far ahead the feedforward takes x_r [s] */
     float xr0_cm;           /* the reference at START [cm] */
     uint32_t breaches;      /* steps with a barrier clamp since START */
-    uint8_t fallback_mode;  /* ppc.fallback: 0 none, 1 MFAC */
+    uint8_t fallback_mode;  /* ppc.fallback: PMA_PPC_FALLBACK_NONE, _MFAC, _WIDEN */
     uint8_t lost;           /* the guarantee was lost since START (latched) */
     uint8_t fallback_active;/* MFAC is in charge (from the first lost tick until STOP) */
     float w1_cm, t_u_s;     /* the monitor's bound and the time it starts [cm, s] */
@@ -88,6 +88,8 @@ typedef struct pma_ctrl {
     uint32_t barrier_run;   /* consecutive ticks with a barrier clamp */
     uint32_t lost_ticks;    /* lost ticks since START (saturates at 2^32-1) */
     float lost_at_s;        /* control time of the first of them [s] */
+    uint32_t widen1_count;  /* WIDEN: widenings of the position funnel since START */
+    float widen1_at_s;      /* WIDEN: control time of the last of them [s] */
     float stream_margin_cm; /* STREAM targets keep this far inside the band (PPC: w1) */
     /* the last step's signals in float: read them with pma_ctrl_out() (Q16.16: converted
      * there, not in every step) */
@@ -107,9 +109,10 @@ typedef struct pma_ctrl_setup {
  * are set); PMA_ERR_FIXED_RANGE when a value does not fit Q16.16. */
 int pma_ctrl_init_arith(pma_ctrl_t *s, const pma_ctrl_setup_t *su);
 /* The PPC's guarantee monitor for one step, in either arithmetic (see below): outside_w1 is
- * t >= t_u and |e| >= w1, barrier a clamp of the law this step; it counts the clamp run and
- * the lost ticks, latches `lost` with `lost_at_s` [s] and, with the fallback, hands over. */
-void pma_ctrl_monitor(pma_ctrl_t *s, float t_s, int outside_w1, uint8_t barrier);
+ * t >= t_u and |e| >= w1, law_flags the law's PMA_PPC_FLAG_* of this step (a barrier clamp, a
+ * widening); it counts the clamp run and the lost ticks, latches `lost` with `lost_at_s` [s]
+ * and, with the MFAC fallback, hands over. */
+void pma_ctrl_monitor(pma_ctrl_t *s, float t_s, int outside_w1, uint32_t law_flags);
 /* The arithmetic's part of pma_ctrl_stream, after the band check. */
 int pma_ctrl_stream_arith(pma_ctrl_t *s, float target_cm);
 
@@ -144,13 +147,20 @@ int pma_ctrl_start(pma_ctrl_t *s, const pma_params_t *p, float period_s);
 int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float *u);
 
 /* The PPC's guarantee monitor (mode PPC; t the control time since START, e = x - x_r with
- * the raw sample): a tick with t >= t_u and |e| >= w1, or (at any t) the last of
+ * the raw sample): a tick with t >= t_u and |e| >= w1, a tick on which the law widened a
+ * funnel (ppc.fallback WIDEN: flags WIDEN1/2), or (at any t) the last of
  * safety.barrier_ticks consecutive ticks with a barrier clamp of the law (the run that faults
- * BARRIER without the fallback) and every clamped tick after it, is a lost tick. The first one latches `lost` and records `lost_at_s`; every one counts in
- * `lost_ticks`. With ppc.fallback 1 the first lost tick hands the loop to MFAC (`shadow`, the
- * mfac.* gains), which has run beside the law from START with its u(k-1) set to the input
- * actually applied (its pseudo partial derivative phi learns from the rig's real response), so
- * the hand-over is bumpless; the law is not stepped again until STOP. */
+ * BARRIER with ppc.fallback NONE) and every clamped tick after it, is a lost tick. The first
+ * one latches `lost` and records `lost_at_s`; every one counts in `lost_ticks`.
+ * The hand-over to MFAC (`shadow`, the mfac.* gains, which has run beside the law from START
+ * with its u(k-1) set to the input actually applied, so that its pseudo partial derivative
+ * phi learns from the rig's real response and the hand-over is bumpless; the law is not
+ * stepped again until STOP) comes
+ *  - with ppc.fallback MFAC at the first lost tick;
+ *  - with ppc.fallback WIDEN at the second widening of the position funnel within t_u of
+ *    the one before (the law could not bring the error back inside its widened funnel: the
+ *    task keeps asking more than the rig gives), or at a clamp run (the widening's floor);
+ *  - with ppc.fallback NONE never: the clamp run faults BARRIER instead. */
 
 /* The last step's signals in float (for telemetry and tests): Q16.16 converts them here. */
 const pma_ctrl_out_t *pma_ctrl_out(pma_ctrl_t *s);

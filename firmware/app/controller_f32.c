@@ -37,7 +37,8 @@ int pma_ctrl_init_arith(pma_ctrl_t *s, const pma_ctrl_setup_t *su)
     switch (s->mode) {
     case PMA_CTRL_MODE_PPC:
         CHECK(pma_ppc_init_f32(&s->c.ppc, &su->ppc));
-        return s->fallback_mode ? pma_mfac_init_f32(&s->shadow, &su->mfac) : PMA_OK;
+        return s->fallback_mode != PMA_PPC_FALLBACK_NONE ? pma_mfac_init_f32(&s->shadow, &su->mfac)
+                                                          : PMA_OK;
     case PMA_CTRL_MODE_MFAC: return pma_mfac_init_f32(&s->c.mfac, &su->mfac);
     case PMA_CTRL_MODE_PID: return pma_pid_init_f32(&s->c.pid, &su->pid);
     default: return PMA_OK;
@@ -71,7 +72,7 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
     switch (s->mode) {
     case PMA_CTRL_MODE_PPC: {
         float u_mfac = 0.0f;
-        if (s->fallback_mode) {
+        if (s->fallback_mode != PMA_PPC_FALLBACK_NONE) {
             CHECK(pma_mfac_step_f32(&s->shadow, x_cm, next_reference(s, t_s), &u_mfac));
         }
         if (!s->fallback_active) {
@@ -92,7 +93,7 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
             o->internal2 = s->c.ppc.out.lambda2_cm_s;
             o->barrier = (uint8_t)((o->flags & (PMA_PPC_FLAG_BARRIER1 | PMA_PPC_FLAG_BARRIER2)) != 0);
         }
-        pma_ctrl_monitor(s, t_s, t_s >= s->t_u_s && fabsf(o->e_cm) >= s->w1_cm, o->barrier);
+        pma_ctrl_monitor(s, t_s, t_s >= s->t_u_s && fabsf(o->e_cm) >= s->w1_cm, o->flags);
         if (s->fallback_active) {
             out = u_mfac;
             o->flags = s->shadow.flags | PMA_CTRL_FLAG_FALLBACK;
@@ -100,7 +101,7 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
             o->internal2 = s->shadow.u1;
         }
         if (s->lost) o->flags |= PMA_CTRL_FLAG_GUARANTEE_LOST;
-        if (s->fallback_mode) s->shadow.u1 = out; /* MFAC learns from the input applied */
+        if (s->fallback_mode != PMA_PPC_FALLBACK_NONE) s->shadow.u1 = out; /* MFAC learns from the input applied */
         break;
     }
     case PMA_CTRL_MODE_MFAC: {

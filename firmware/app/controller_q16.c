@@ -53,7 +53,8 @@ int pma_ctrl_init_arith(pma_ctrl_t *s, const pma_ctrl_setup_t *su)
         CHECK(to_q16(s->ref_ff_u_per_cm, &s->q_ref_ff_u_per_cm));
         CHECK(to_q16(s->ref_ff_lead_s, &s->q_ref_ff_lead_s));
         CHECK(pma_ppc_init_q16(&s->c.ppc, &su->ppc));
-        return s->fallback_mode ? pma_mfac_init_q16(&s->shadow, &su->mfac) : PMA_OK;
+        return s->fallback_mode != PMA_PPC_FALLBACK_NONE ? pma_mfac_init_q16(&s->shadow, &su->mfac)
+                                                          : PMA_OK;
     case PMA_CTRL_MODE_MFAC: return pma_mfac_init_q16(&s->c.mfac, &su->mfac);
     case PMA_CTRL_MODE_PID: return pma_pid_init_q16(&s->c.pid, &su->pid);
     default: return PMA_OK;
@@ -119,7 +120,7 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
     switch (s->mode) {
     case PMA_CTRL_MODE_PPC: {
         pma_q16_t u_mfac = 0;
-        if (s->fallback_mode) CHECK(pma_mfac_step_q16(&s->shadow, x, next_reference(s, t), &u_mfac));
+        if (s->fallback_mode != PMA_PPC_FALLBACK_NONE) CHECK(pma_mfac_step_q16(&s->shadow, x, next_reference(s, t), &u_mfac));
         if (!s->fallback_active) {
             /* the options (controller.h) choose the law's inputs */
             const pma_q16_t x_law = s->ppc_obs_pos ? q32_to_q16(s->vel.xh_q32) : x;
@@ -140,7 +141,7 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
             o->internal2 = s->c.ppc.out.lambda2_cm_s;
             barrier = (uint8_t)((flags & (PMA_PPC_FLAG_BARRIER1 | PMA_PPC_FLAG_BARRIER2)) != 0);
         }
-        pma_ctrl_monitor(s, t_s, t >= s->q_t_u_s && q16_abs(o->e_cm) >= s->q_w1_cm, barrier);
+        pma_ctrl_monitor(s, t_s, t >= s->q_t_u_s && q16_abs(o->e_cm) >= s->q_w1_cm, flags);
         if (s->fallback_active) {
             out = u_mfac;
             flags = s->shadow.flags | PMA_CTRL_FLAG_FALLBACK;
@@ -148,7 +149,7 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
             o->internal2 = s->shadow.u1;
         }
         if (s->lost) flags |= PMA_CTRL_FLAG_GUARANTEE_LOST;
-        if (s->fallback_mode) s->shadow.u1 = out; /* MFAC learns from the input applied */
+        if (s->fallback_mode != PMA_PPC_FALLBACK_NONE) s->shadow.u1 = out; /* MFAC learns from the input applied */
         break;
     }
     case PMA_CTRL_MODE_MFAC:

@@ -10,7 +10,9 @@ import numpy as np
 
 from hil import summary
 
-HEADER = Path(__file__).resolve().parents[2] / "firmware/app/controller.h"
+ROOT = Path(__file__).resolve().parents[2]
+HEADER = ROOT / "firmware/app/controller.h"
+PPC_HEADER = ROOT / "firmware/control/include/pma/ppc.h"
 
 
 def test_flag_bits_are_the_firmwares():
@@ -19,6 +21,11 @@ def test_flag_bits_are_the_firmwares():
              for m in re.finditer(r"#define PMA_CTRL_FLAG_(\w+)\s+0x([0-9A-Fa-f]+)u", text)}
     assert found == {"GUARANTEE_LOST": summary.CTRL_FLAG_GUARANTEE_LOST,
                      "FALLBACK": summary.CTRL_FLAG_FALLBACK}
+
+
+def test_wide_flag_is_the_laws():
+    m = re.search(r"#define PMA_PPC_FLAG_WIDE\s+0x([0-9A-Fa-f]+)u", PPC_HEADER.read_text())
+    assert m is not None and int(m.group(1), 16) == summary.PPC_FLAG_WIDE
 
 
 def test_first_flag_time():

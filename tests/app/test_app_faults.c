@@ -375,14 +375,16 @@ static void test_barrier(void)
     TEST_ASSERT_GREATER_THAN(500u, longest); /* far beyond the 100 that trip when enabled */
 }
 
-/* The same task with the default ppc.fallback 1: no fault; the 100th consecutive clamped tick
+/* The same task with ppc.fallback 1 (MFAC): no fault; the 100th consecutive clamped tick
  * (safety.barrier_ticks) loses the guarantee and hands the loop to MFAC, bumplessly (the
  * output of that tick is MFAC's from the input applied before); the loss is flagged in the
  * heartbeat and in TELEM_E, counted (GET_STATUS 8, and every tick after t_u with |e| >= w1),
  * and its time kept (GET_STATUS 9); the supervisor's limits still apply. */
 static void test_barrier_hands_over_to_mfac(void)
 {
-    to_running(0);
+    to_armed(0);
+    set_u32(PMA_PARAM_PPC_FALLBACK, PMA_PPC_FALLBACK_MFAC);
+    command_ok(PMA_CMD_START, 0, PMA_OK);
     TEST_ASSERT_EQUAL_HEX32(UINT32_MAX, status_value(PMA_STATUS_GUARANTEE_LOST_AT_MS));
     TEST_ASSERT_EQUAL_INT(0u, status_value(PMA_STATUS_GUARANTEE_LOST_TICKS));
     pma_fake_adc_set(counts_at(-0.2f)); /* e = 1.3 cm >> w1 = 0.2 cm, inside the band */
@@ -435,6 +437,71 @@ static void test_barrier_hands_over_to_mfac(void)
     to_running(0);
     TEST_ASSERT_FALSE(app.ctrl.lost || app.ctrl.fallback_active);
     TEST_ASSERT_EQUAL_HEX32(UINT32_MAX, status_value(PMA_STATUS_GUARANTEE_LOST_AT_MS));
+}
+
+/* The same task with the default ppc.fallback 2 (WIDEN): the law never clamps; where it
+ * would, it widens its funnel (flags WIDEN1/2, then WIDE), which is the first lost tick
+ * (flagged, counted, its time kept); no BARRIER fault. The muscle does not move, so the
+ * position funnel, shrinking back, meets the error again within t_u: that second widening
+ * hands the loop to MFAC, bumplessly. */
+static void test_widening_instead_of_the_clamp(void)
+{
+    to_running(0);
+    TEST_ASSERT_EQUAL_INT(PMA_PPC_FALLBACK_WIDEN, app.params.ppc_fallback);
+    pma_fake_adc_set(counts_at(-0.2f)); /* e = 1.3 cm >> w1 = 0.2 cm, inside the band */
+    const uint32_t widen_flags = PMA_PPC_FLAG_WIDEN1 | PMA_PPC_FLAG_WIDEN2;
+    uint32_t t = 0, widen1 = 0, handover_tick = 0, first_lost_tick = 0;
+    float first_lost_t_s = 0.0f, widen1_t_s = 0.0f;
+    const float t_u_s = app.params.ppc_t_u_s;
+    while (t < 3000) {
+        if (t % 100 == 0) send_host_heartbeat((uint8_t)t);
+        const float u_before = app.output.u;
+        step();
+        ++t;
+        assert_state(app.state, PMA_STATE_RUNNING);
+        const pma_ctrl_out_t *o = pma_ctrl_out(&app.ctrl);
+        TEST_ASSERT_TRUE(app.output.u >= app.params.ctrl_u_min && app.output.u <= app.params.ctrl_u_max);
+        if (handover_tick != 0) {
+            TEST_ASSERT_TRUE(o->flags & PMA_CTRL_FLAG_FALLBACK);
+            continue;
+        }
+        TEST_ASSERT_FALSE(o->barrier);   /* widened, never clamped */
+        if (first_lost_tick == 0) {
+            if (!(o->flags & widen_flags)) {
+                TEST_ASSERT_FALSE(app.ctrl.lost || (o->flags & PMA_CTRL_FLAG_GUARANTEE_LOST));
+                continue;
+            }
+            first_lost_tick = t;
+            first_lost_t_s = o->t_s;
+        }
+        TEST_ASSERT_TRUE(app.ctrl.lost && (o->flags & PMA_CTRL_FLAG_GUARANTEE_LOST));
+        if (app.ctrl.fallback_active) {
+            /* the second widening of the position funnel within t_u of the first (the
+             * law's flags: the tick's own are MFAC's from now on) */
+            TEST_ASSERT_TRUE(app.ctrl.c.ppc.out.flags & PMA_PPC_FLAG_WIDEN1);
+            TEST_ASSERT_TRUE(o->flags & PMA_CTRL_FLAG_FALLBACK);
+            TEST_ASSERT_EQUAL_INT(1u, widen1);
+            TEST_ASSERT_TRUE(o->t_s - widen1_t_s < t_u_s);
+            TEST_ASSERT_FLOAT_WITHIN((float)CTRL_LSB, u_before, CTRL_F32(app.ctrl.shadow.u2));
+            handover_tick = t;
+            continue;
+        }
+        TEST_ASSERT_TRUE(o->flags & PMA_PPC_FLAG_WIDE);
+        TEST_ASSERT_FALSE(o->flags & PMA_CTRL_FLAG_FALLBACK);
+        if (o->flags & PMA_PPC_FLAG_WIDEN1) {
+            ++widen1;
+            widen1_t_s = o->t_s;
+        }
+    }
+    TEST_ASSERT_GREATER_THAN(0u, first_lost_tick);
+    TEST_ASSERT_GREATER_THAN(first_lost_tick, handover_tick);
+    TEST_ASSERT_EQUAL_INT(0u, app.ctrl.breaches);
+    TEST_ASSERT_EQUAL_INT(lroundf(first_lost_t_s * 1000.0f), status_value(PMA_STATUS_GUARANTEE_LOST_AT_MS));
+    TEST_ASSERT_GREATER_THAN(0u, status_value(PMA_STATUS_GUARANTEE_LOST_TICKS));
+    const struct pma_proto_heartbeat_t h = next_heartbeat();
+    TEST_ASSERT_TRUE(h.flags & PMA_HB_GUARANTEE_LOST);
+    TEST_ASSERT_TRUE(h.flags & PMA_HB_FALLBACK);
+    TEST_ASSERT_EQUAL_INT(PMA_FAULT_NONE, h.fault_code);
 }
 
 /* ---------------------------------------------------------------- DAC -- */
@@ -707,6 +774,7 @@ int main(void)
     RUN_TEST(test_non_finite_output);
     RUN_TEST(test_barrier);
     RUN_TEST(test_barrier_hands_over_to_mfac);
+    RUN_TEST(test_widening_instead_of_the_clamp);
     RUN_TEST(test_dac_failure);
     RUN_TEST(test_bus_off);
     RUN_TEST(test_bridge_fault_frame);

@@ -176,6 +176,71 @@ static void test_soft_barrier(void)
     TEST_ASSERT_EQUAL_HEX32(soft.out.flags, softq.out.flags);
 }
 
+/* Funnel widening (widen_r): where the law would clamp, the funnel widens so that |r| = widen_r
+ * (flags WIDEN1/2, WIDE; no barrier flag, bounded gain), then shrinks back to w over t_u with
+ * the tuning function's shape; float and fixed point agree. */
+static void test_funnel_widening(void)
+{
+    pma_ppc_config_t c = case3();
+    c.widen_r = 0.5f;
+    pma_ppc_f32_t f;
+    pma_ppc_q16_t q;
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_f32(&f, &c));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_q16(&q, &c));
+    float u;
+    pma_q16_t uq;
+    /* after t_u, e = +0.3 cm = 1.5 w1: g1 = 0.5 / 1.5, chi = tan(pi / 4) = 1, theta = -a = -2;
+     * lambda2 = 2 = 4 w2: g2 = 0.125, delta = 1, beta = 2 g2 / w2 = 0.5, u_law = -c beta = -1 */
+    const uint32_t widened = PMA_PPC_FLAG_WIDEN1 | PMA_PPC_FLAG_WIDEN2 | PMA_PPC_FLAG_WIDE;
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_f32(&f, 10.0f, -1.7f, 0.0f, -2.0f, &u));
+    TEST_ASSERT_EQUAL_HEX32(widened, f.out.flags);
+    assert_near(f.out.g1, 1.0 / 3.0, 1e-6);
+    assert_near(f.out.chi, 1.0, 1e-5);
+    assert_near(f.out.g2, 0.125, 1e-6);
+    assert_near(f.out.delta, 1.0, 1e-5);
+    assert_near(f.out.beta_s_cm, 0.5, 1e-5);
+    assert_near(f.out.u_law, -1.0, 1e-5);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_q16(&q, Q16(10.0), Q16(-1.7), 0, Q16(-2.0), &uq));
+    TEST_ASSERT_EQUAL_HEX32(widened, q.out.flags);
+    assert_near(F30(q.out.g1), 1.0 / 3.0, 2e-5);   /* e in Q16.16 */
+    assert_near(F30(q.out.g2), 0.125, 2e-5);
+    assert_near(F16(uq), u, 2e-4);
+    TEST_ASSERT_EQUAL_INT(0, f.breaches1 + f.breaches2 + q.breaches1 + q.breaches2);
+    /* half of t_u later, a small error: g = 1 - (1 - k)(0.5 + 0.5 cos(pi / 2)) = (1 + k) / 2,
+     * still wide, no new widening */
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_f32(&f, 11.0f, -1.97f, 0.0f, -2.0f, &u));
+    TEST_ASSERT_EQUAL_HEX32(PMA_PPC_FLAG_WIDE, f.out.flags);
+    assert_near(f.out.g1, (1.0 + 1.0 / 3.0) / 2.0, 1e-5);
+    assert_near(f.out.g2, (1.0 + 0.125) / 2.0, 1e-5);
+    assert_near(f.out.chi, tan(PI / 2 * 0.15 * f.out.g1), 1e-4);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_q16(&q, Q16(11.0), Q16(-1.97), 0, Q16(-2.0), &uq));
+    TEST_ASSERT_EQUAL_HEX32(PMA_PPC_FLAG_WIDE, q.out.flags);
+    assert_near(F30(q.out.g1), f.out.g1, 1e-5);
+    assert_near(F16(uq), u, 1e-3);    /* 0.02 % of it */
+    /* t_u after the widening: the funnels are as assigned again, the paper's law exactly */
+    pma_ppc_f32_t paper;
+    pma_ppc_config_t cp = case3();
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_f32(&paper, &cp));
+    float u_paper;
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_f32(&f, 12.0f, -1.97f, -0.3f, -2.0f, &u));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_f32(&paper, 12.0f, -1.97f, -0.3f, -2.0f, &u_paper));
+    TEST_ASSERT_EQUAL_HEX32(0, f.out.flags);
+    TEST_ASSERT_TRUE(f.out.g1 == 1.0f && f.out.g2 == 1.0f && u == u_paper);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_q16(&q, Q16(12.0), Q16(-1.97), Q16(-0.3), Q16(-2.0), &uq));
+    TEST_ASSERT_EQUAL_HEX32(0, q.out.flags);
+    /* an error far beyond the funnel: the scale stops at its floor 2^-20, then the clamp */
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_f32(&f, 20.0f, 1.0e6f, 0.0f, -2.0f, &u));
+    assert_near(f.out.g1, 1.0 / 1048576.0, 1e-12);
+    TEST_ASSERT_TRUE(f.out.flags & PMA_PPC_FLAG_BARRIER1);
+    TEST_ASSERT_TRUE(isfinite(u) && u < 0.0f && u >= c.u_min);   /* the right direction, bounded */
+    /* reset: the funnels as assigned */
+    pma_ppc_reset_f32(&f);
+    pma_ppc_reset_q16(&q);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_f32(&f, 20.0f, -1.97f, 0.0f, -2.0f, &u));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_q16(&q, Q16(20.0), Q16(-1.97), 0, Q16(-2.0), &uq));
+    TEST_ASSERT_TRUE(f.out.g1 == 1.0f && q.out.g1 == PMA_Q30_ONE);
+}
+
 /* Feedforward switch: off keeps u_ff = 0; on integrates the law's output,
  * holds it while saturated in the same direction, stays within limits. */
 static void test_feedforward(void)
@@ -260,6 +325,10 @@ static void test_invalid_config(void)
     BAD(soft_barrier_r, 1.5f, PMA_ERR_RANGE);
     BAD(ff_gain_per_s, -1.0f, PMA_ERR_RANGE);
     BAD(ff_init, 1000.0f, PMA_ERR_RANGE);
+    BAD(widen_r, 0.01f, PMA_ERR_RANGE);
+    BAD(widen_r, -0.5f, PMA_ERR_RANGE);
+    BAD(widen_r, 1.0f - 1e-3f, PMA_ERR_RANGE);   /* not below 1 - barrier_margin */
+    BAD(widen_r, NAN, PMA_ERR_NOT_FINITE);
     BAD(period_s, 0.0f, PMA_ERR_RANGE);
     BAD(k_low_cm, NAN, PMA_ERR_NOT_FINITE);
     BAD(k_high_cm, -4.0f, PMA_ERR_RANGE);
@@ -348,6 +417,7 @@ int main(void)
     RUN_TEST(test_law_direction_and_equations);
     RUN_TEST(test_barrier_clamp);
     RUN_TEST(test_soft_barrier);
+    RUN_TEST(test_funnel_widening);
     RUN_TEST(test_feedforward);
     RUN_TEST(test_invalid_config);
     RUN_TEST(test_bad_step_inputs);

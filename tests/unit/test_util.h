@@ -13,5 +13,6 @@
 
 #define Q16(x) pma_q16_from_f32((float)(x))
 #define F16(x) ((double)pma_q16_to_f32(x))
+#define F30(x) ((double)pma_q30_to_f32(x))
 
 #endif /* PMA_TEST_UTIL_H */

@@ -32,6 +32,7 @@ enum pma_param_id {
     PMA_PARAM_PPC_FALLBACK = 44,
     PMA_PARAM_PPC_REF_FF = 45,
     PMA_PARAM_PPC_REF_FF_LEAD_S = 46,
+    PMA_PARAM_PPC_WIDEN_R = 47,
     PMA_PARAM_MFAC_ETA = 48,
     PMA_PARAM_MFAC_MU = 49,
     PMA_PARAM_MFAC_RHO = 50,
@@ -80,9 +81,9 @@ enum pma_param_id {
     PMA_PARAM_SAFETY_SAFE_KPA = 168,
 };
 
-#define PMA_PARAM_COUNT 71u
+#define PMA_PARAM_COUNT 72u
 /* CRC-32 of the table (pmactl.protocol.param_table_hash): DEVICE_INFO's ParamTableHash. */
-#define PMA_PARAM_TABLE_HASH 0x3698F406u
+#define PMA_PARAM_TABLE_HASH 0x709858EBu
 
 #define PMA_SYS_PLANT_BRIDGE_OFF 0u
 #define PMA_SYS_PLANT_BRIDGE_ON 1u
@@ -91,6 +92,9 @@ enum pma_param_id {
 #define PMA_CTRL_MODE_MFAC 2u
 #define PMA_CTRL_MODE_PID 3u
 #define PMA_CTRL_MODE_OPEN_LOOP 4u
+#define PMA_PPC_FALLBACK_NONE 0u
+#define PMA_PPC_FALLBACK_MFAC 1u
+#define PMA_PPC_FALLBACK_WIDEN 2u
 #define PMA_VEL_KIND_FILTERED_DIFF 0u
 #define PMA_VEL_KIND_TRACKING 1u
 #define PMA_REF_KIND_HOLD 0u
@@ -131,6 +135,7 @@ typedef struct pma_params {
     uint32_t ppc_fallback;                /* id 44 */
     float ppc_ref_ff;                  /* id 45 [input unit/cm] */
     float ppc_ref_ff_lead_s;           /* id 46 [s] */
+    float ppc_widen_r;                 /* id 47 */
     float mfac_eta;                    /* id 48 */
     float mfac_mu;                     /* id 49 */
     float mfac_rho;                    /* id 50 */

@@ -27,10 +27,17 @@ int pma_ppc_init_f32(pma_ppc_f32_t *s, const pma_ppc_config_t *cfg)
     return PMA_OK;
 }
 
+#define WIDEN_ON 4u   /* widen_bits: widening on */
+
 void pma_ppc_reset_f32(pma_ppc_f32_t *s)
 {
     if (s == NULL) return;
     s->u_ff = s->cfg.ff_init;
+    for (int i = 0; i < 2; ++i) {
+        s->widen_k[i] = 1.0f;
+        s->widen_t_s[i] = 0.0f;
+    }
+    s->widen_bits = s->cfg.widen_r > 0.0f ? WIDEN_ON : 0u;
     s->breaches1 = 0;
     s->breaches2 = 0;
     s->out = (pma_ppc_out_f32_t){0};
@@ -59,6 +66,56 @@ static float transform(const pma_ppc_f32_t *s, float r, float *sec2, uint32_t *f
     return r < 0.0f ? -t : t;
 }
 
+#define WIDEN_K_MIN (1.0f / 1048576.0f)   /* 2^-20: the widening's floor */
+
+/* Funnel scale g_i at t (ppc.h, "Funnel widening") of a channel wider than assigned; t_u after
+ * its last widening the funnel is as assigned again (the step's common case again). */
+static float widen_scale(pma_ppc_f32_t *s, int i, float t_s)
+{
+    const float dt = t_s - s->widen_t_s[i];
+    if (!(dt < s->cfg.t_u_s)) {
+        s->widen_k[i] = 1.0f;
+        s->widen_bits &= ~(1u << i);
+        return 1.0f;
+    }
+    const float dt_frac = dt > 0.0f ? dt / s->cfg.t_u_s : 0.0f;
+    return 1.0f - (1.0f - s->widen_k[i]) * (0.5f + 0.5f * pma_cos_pi_f32(dt_frac));
+}
+
+/* r_i = raw g_i of channel i (0: lambda1, 1: lambda2; raw = lambda_i / w_i) where its funnel
+ * is wider than assigned or widening is on and raw is at the clamp: where |r_i| reaches the
+ * clamp, the channel widens so that |r_i| = widen_r (flag WIDEN1/2). Writes g_i (and flag
+ * WIDE while g_i < 1); the clamp itself is transform's. */
+static float channel_r_wide(pma_ppc_f32_t *s, int i, float t_s, float raw, float *g,
+                            uint32_t *flags)
+{
+    float k = (s->widen_bits & (1u << i)) ? widen_scale(s, i, t_s) : 1.0f;
+    const float ar = fabsf(raw * k);
+    if ((s->widen_bits & WIDEN_ON) && ar >= s->r_max) {
+        k = fmaxf(k * (s->cfg.widen_r / ar), WIDEN_K_MIN);
+        s->widen_k[i] = k;
+        s->widen_t_s[i] = t_s;
+        s->widen_bits |= 1u << i;
+        *flags |= PMA_PPC_FLAG_WIDEN1 << i;
+    }
+    if (k < 1.0f) *flags |= PMA_PPC_FLAG_WIDE;
+    *g = k;
+    return raw * k;
+}
+
+/* r_i of channel i in the step. The common case costs what the paper's law alone does: the
+ * funnel as assigned and raw inside the clamp, or widening off. */
+static inline float channel_r(pma_ppc_f32_t *s, int i, float t_s, float raw, float *g,
+                              uint32_t *flags)
+{
+    const uint32_t bits = s->widen_bits;
+    if (!(bits & (1u << i)) && (!(bits & WIDEN_ON) || fabsf(raw) < s->r_max)) {
+        *g = 1.0f;
+        return raw;
+    }
+    return channel_r_wide(s, i, t_s, raw, g, flags);
+}
+
 int pma_ppc_step_f32(pma_ppc_f32_t *s, float t_s, float x_cm, float v_cm_s, float xr_cm,
                      float *u)
 {
@@ -69,20 +126,24 @@ int pma_ppc_step_f32(pma_ppc_f32_t *s, float t_s, float x_cm, float v_cm_s, floa
     }
     if (t_s < 0.0f) return PMA_ERR_RANGE;
 
-    pma_ppc_out_f32_t o = {0};
+    pma_ppc_out_f32_t o;   /* every field is set below (not zeroed: a memset call per step) */
+    o.flags = 0;
     o.alpha = (t_s < s->cfg.t_u_s) ? 0.5f - 0.5f * pma_cos_pi_f32(t_s / s->cfg.t_u_s) : 1.0f; /* 15 */
     o.e_cm = x_cm - xr_cm;                                                    /* 8 */
     o.lambda1_cm = o.alpha * o.e_cm;                                          /* 16 */
     if (!isfinite(o.lambda1_cm)) return PMA_ERR_NOT_FINITE;   /* inputs too far apart */
     float sec2;
-    o.chi = transform(s, o.lambda1_cm * s->inv_w1, &sec2, &o.flags,
+    const float r1 = channel_r(s, 0, t_s, o.lambda1_cm * s->inv_w1, &o.g1, &o.flags);
+    o.chi = transform(s, r1, &sec2, &o.flags,
                       PMA_PPC_FLAG_BARRIER1, PMA_PPC_FLAG_SOFT1);             /* 18 */
     o.theta_cm_s = -s->cfg.a_cm_s * o.chi;                                   /* 17 */
     o.lambda2_cm_s = o.alpha * v_cm_s - o.theta_cm_s;                         /* 19 */
     if (!isfinite(o.lambda2_cm_s)) return PMA_ERR_NOT_FINITE;
-    o.delta = transform(s, o.lambda2_cm_s * s->inv_w2, &sec2, &o.flags,
+    const float r2 = channel_r(s, 1, t_s, o.lambda2_cm_s * s->inv_w2, &o.g2, &o.flags);
+    o.delta = transform(s, r2, &sec2, &o.flags,
                         PMA_PPC_FLAG_BARRIER2, PMA_PPC_FLAG_SOFT2);           /* 22 */
     o.beta_s_cm = sec2 * s->inv_w2;                                           /* 21 */
+    if (o.g2 < 1.0f) o.beta_s_cm *= o.g2;   /* the widened funnel's 1/w2 */
     o.u_law = -s->cfg.c * o.beta_s_cm * o.delta;                              /* 20 */
 
     o.u_ff = s->u_ff;

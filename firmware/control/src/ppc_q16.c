@@ -48,6 +48,7 @@ int pma_ppc_init_q16(pma_ppc_q16_t *s, const pma_ppc_config_t *cfg)
     s->inv_t_u_q24 = pma_to_q(1.0f / cfg->t_u_s, 24);
     s->ff_k = pma_to_q(ff_k, 30);
     s->r_max = pma_to_q(1.0f - cfg->barrier_margin, 30);
+    s->widen_r = pma_to_q(cfg->widen_r, 30);
     s->soft_r = soft_r;
     s->soft_tan = (pma_q16_t)soft_tan;
     s->soft_sec2 = (pma_q16_t)soft_sec2;
@@ -56,28 +57,40 @@ int pma_ppc_init_q16(pma_ppc_q16_t *s, const pma_ppc_config_t *cfg)
     return PMA_OK;
 }
 
+#define WIDEN_ON 4u   /* widen_bits: widening on */
+
 void pma_ppc_reset_q16(pma_ppc_q16_t *s)
 {
     if (s == NULL) return;
     s->u_ff_q32 = (int64_t)s->ff_init * 65536;
+    for (int i = 0; i < 2; ++i) {
+        s->widen_k[i] = PMA_Q30_ONE;
+        s->widen_t_s[i] = 0;
+    }
     s->breaches1 = 0;
     s->breaches2 = 0;
+    s->widen_bits = s->widen_r > 0 ? WIDEN_ON : 0u;
     s->out = (pma_ppc_out_q16_t){0};
     s->out.u_ff = s->ff_init;
+    s->out.g1 = PMA_Q30_ONE;   /* the step's common case does not write them */
+    s->out.g2 = PMA_Q30_ONE;
 }
 
-/* r = lambda / w in Q2.30 from lambda with 24 fractional bits (int64, so
- * the product alpha e is not rounded to Q16.16 before 1/w amplifies it) and
- * 1/w in Q8.24; clamped to +-r_max (flagging the barrier). |lambda| is
- * limited to 128 first (then |r| > 1 anyway, since w <= 100), which keeps
- * the product below 2^63. */
+/* r = lambda / w in Q2.30 (int64, not yet clamped) from lambda with 24 fractional bits (int64,
+ * so the product alpha e is not rounded to Q16.16 before 1/w amplifies it) and 1/w in Q8.24.
+ * |lambda| is limited to 128 first (then |r| > 1 anyway, since w <= 100), which keeps the
+ * product below 2^63. */
 #define LAMBDA_Q24_LIMIT ((int64_t)INT32_MAX)
-static pma_q30_t normalise(const pma_ppc_q16_t *s, int64_t lambda_q24, int32_t inv_w_q24,
-                           uint32_t *flags, uint32_t barrier_flag)
+static int64_t raw_r(int64_t lambda_q24, int32_t inv_w_q24)
 {
     if (lambda_q24 > LAMBDA_Q24_LIMIT) lambda_q24 = LAMBDA_Q24_LIMIT;
     if (lambda_q24 < -LAMBDA_Q24_LIMIT) lambda_q24 = -LAMBDA_Q24_LIMIT;
-    const int64_t r = pma_rshift_round(pma_mul32((int32_t)lambda_q24, inv_w_q24), 18);
+    return pma_rshift_round(pma_mul32((int32_t)lambda_q24, inv_w_q24), 18);
+}
+
+/* r clamped to +-r_max (flagging the barrier) */
+static pma_q30_t clamp_r(const pma_ppc_q16_t *s, int64_t r, uint32_t *flags, uint32_t barrier_flag)
+{
     if (r >= s->r_max) {
         *flags |= barrier_flag;
         return s->r_max;
@@ -87,6 +100,73 @@ static pma_q30_t normalise(const pma_ppc_q16_t *s, int64_t lambda_q24, int32_t i
         return -s->r_max;
     }
     return (pma_q30_t)r;
+}
+
+/* 1/w_i of the widened funnel, w_i / g: (1/w_i) g in Q8.24 */
+static int32_t widened_inv_w(int32_t inv_w_q24, pma_q30_t g)
+{
+    return g >= PMA_Q30_ONE ? inv_w_q24 : (int32_t)pma_rshift_round(pma_mul32(inv_w_q24, g), 30);
+}
+
+#define WIDEN_K_MIN ((pma_q30_t)1 << 10)   /* 2^-20: the widening's floor */
+
+/* Funnel scale g_i at t, Q2.30 (ppc.h, "Funnel widening"); t_u after the last widening the
+ * funnel is as assigned again (widen_k back to 1: the step's common case again). */
+static pma_q30_t widen_scale(pma_ppc_q16_t *s, int i, pma_q16_t t)
+{
+    const pma_q30_t k = s->widen_k[i];
+    const pma_q16_t dt = pma_q16_ssub(t, s->widen_t_s[i]);
+    if (dt >= s->t_u) {
+        s->widen_k[i] = PMA_Q30_ONE;
+        s->widen_bits &= ~(1u << i);
+        return PMA_Q30_ONE;
+    }
+    int64_t x = dt > 0 ? pma_rshift_round(pma_mul32(dt, s->inv_t_u_q24), 10) : 0;  /* dt/t_u, Q30 */
+    if (x > PMA_Q30_ONE) x = PMA_Q30_ONE;
+    const int64_t h = ((int64_t)PMA_Q30_ONE + pma_q30_cos_pi((pma_q30_t)x)) / 2;    /* Q30 */
+    return (pma_q30_t)(PMA_Q30_ONE - pma_rshift_round((int64_t)(PMA_Q30_ONE - k) * h, 30));
+}
+
+/* r_i = lambda_i g_i / w_i of channel i (0: lambda1, 1: lambda2) in Q2.30 where its funnel is
+ * wider than assigned or r_i is at the clamp (the common case is inline in the step): where
+ * widening is on and |r_i| reaches the clamp, the channel widens so that |r_i| = widen_r; then
+ * clamped to +-r_max (flag BARRIER1/2). Writes the scale g_i (and flag WIDE while g_i < 1). */
+static pma_q30_t channel_r_wide(pma_ppc_q16_t *s, int i, pma_q16_t t, int64_t lambda_q24,
+                                int32_t inv_w_q24, int64_t r_plain, pma_q30_t *g,
+                                uint32_t *flags)
+{
+    int64_t r = r_plain;   /* r with the funnel as assigned */
+    *g = PMA_Q30_ONE;
+    if (s->widen_k[i] < PMA_Q30_ONE) {
+        *g = widen_scale(s, i, t);
+        r = raw_r(lambda_q24, widened_inv_w(inv_w_q24, *g));
+    }
+    const int64_t ar = r < 0 ? -r : r;
+    if (s->widen_r > 0 && ar >= s->r_max) {
+        int64_t k = ((int64_t)*g * s->widen_r) / ar;      /* Q60 / Q30: Q30 */
+        if (k < WIDEN_K_MIN) k = WIDEN_K_MIN;
+        *g = (pma_q30_t)k;
+        s->widen_k[i] = *g;
+        s->widen_t_s[i] = t;
+        s->widen_bits |= 1u << i;
+        *flags |= PMA_PPC_FLAG_WIDEN1 << i;
+        r = raw_r(lambda_q24, widened_inv_w(inv_w_q24, *g));
+    }
+    if (*g < PMA_Q30_ONE) *flags |= PMA_PPC_FLAG_WIDE;
+    return clamp_r(s, r, flags, PMA_PPC_FLAG_BARRIER1 << i);
+}
+
+/* r_i of channel i in the step, from r with the funnel as assigned. The common case costs what
+ * the paper's law alone does: the funnel as assigned and r inside the clamp, or widening off. */
+static inline pma_q30_t channel_r(pma_ppc_q16_t *s, uint32_t widen_bits, int i, pma_q16_t t,
+                                  int64_t lambda_q24, int32_t inv_w_q24, int64_t r,
+                                  pma_q30_t *g, uint32_t *flags)
+{
+    if (!(widen_bits & (1u << i))) {
+        if (r < s->r_max && r > -(int64_t)s->r_max) return (pma_q30_t)r;
+        if (!(widen_bits & WIDEN_ON)) return clamp_r(s, r, flags, PMA_PPC_FLAG_BARRIER1 << i);
+    }
+    return channel_r_wide(s, i, t, lambda_q24, inv_w_q24, r, g, flags);
 }
 
 /* tan(pi r / 2) with the optional soft barrier; writes sec^2 (Q16.16). */
@@ -130,18 +210,21 @@ int pma_ppc_step_q16(pma_ppc_q16_t *s, pma_q16_t t_s, pma_q16_t x_cm, pma_q16_t 
     o->e_cm = pma_q16_ssub(x_cm, xr_cm);                                        /* 8 */
     const int64_t lambda1_q24 = pma_rshift_round(pma_mul32(o->e_cm, o->alpha), 22);   /* 16 */
     o->lambda1_cm = pma_q16_sat64(pma_rshift_round(lambda1_q24, 8));
-    const pma_q30_t r1 = normalise(s, lambda1_q24, s->inv_w1_q24, &o->flags,
-                                   PMA_PPC_FLAG_BARRIER1);
+    /* channel 0's step changes only bit 0 of widen_bits: the copy serves both channels */
+    const uint32_t widen_bits = s->widen_bits;
+    const pma_q30_t r1 = channel_r(s, widen_bits, 0, t_s, lambda1_q24, s->inv_w1_q24,
+                                   raw_r(lambda1_q24, s->inv_w1_q24), &o->g1, &o->flags);
     o->chi = transform(s, r1, &sec2, &o->flags, PMA_PPC_FLAG_SOFT1);              /* 18 */
     const int64_t theta_q24 = -pma_rshift_round(pma_mul32(s->a, o->chi), 8);      /* 17 */
     o->theta_cm_s = pma_q16_sat64(pma_rshift_round(theta_q24, 8));
     const int64_t lambda2_q24 =
         pma_rshift_round(pma_mul32(v_cm_s, o->alpha), 22) - theta_q24;            /* 19 */
     o->lambda2_cm_s = pma_q16_sat64(pma_rshift_round(lambda2_q24, 8));
-    const pma_q30_t r2 = normalise(s, lambda2_q24, s->inv_w2_q24, &o->flags,
-                                   PMA_PPC_FLAG_BARRIER2);
+    const pma_q30_t r2 = channel_r(s, widen_bits, 1, t_s, lambda2_q24, s->inv_w2_q24,
+                                   raw_r(lambda2_q24, s->inv_w2_q24), &o->g2, &o->flags);
+    const int32_t inv_w2 = widened_inv_w(s->inv_w2_q24, o->g2);   /* of the funnel, Q8.24 */
     o->delta = transform(s, r2, &sec2, &o->flags, PMA_PPC_FLAG_SOFT2);            /* 22 */
-    o->beta_s_cm = pma_q16_sat64(pma_rshift_round(pma_mul32(sec2, s->inv_w2_q24), 24)); /* 21 */
+    o->beta_s_cm = pma_q16_sat64(pma_rshift_round(pma_mul32(sec2, inv_w2), 24));  /* 21 */
     o->u_law = pma_q16_sneg(pma_q16_smul(pma_q16_smul(s->c, o->beta_s_cm), o->delta)); /* 20 */
 
     o->u_ff = pma_q16_sat64(pma_rshift_round(s->u_ff_q32, 16));

@@ -842,7 +842,7 @@ struct pma_proto_telem_e_t {
     float pressure_kpa;
 
     /**
-     * The control law's flags of the step (PPC: bit 0 lambda1 barrier clamp, 1 lambda2 barrier clamp, 2 output at u_max, 3 at u_min, 4 and 5 beyond the soft barrier; MFAC: 0 phi reset, 2 and 3 as PPC; PID: 2 and 3 as PPC), and bit 14 PPC: the guarantee was lost since START, bit 15 PPC: MFAC is in charge (its flags then fill bits 0-3).
+     * The control law's flags of the step (PPC: bit 0 lambda1 barrier clamp, 1 lambda2 barrier clamp, 2 output at u_max, 3 at u_min, 4 and 5 beyond the soft barrier, 6 and 7 the funnel of lambda1, lambda2 widened this step, 8 a funnel still wider than assigned (ppc.fallback WIDEN); MFAC: 0 phi reset, 2 and 3 as PPC; PID: 2 and 3 as PPC), and bit 14 PPC: the guarantee was lost since START, bit 15 PPC: MFAC is in charge (its flags then fill bits 0-3).
      *
      * Range: 0..65535 (0..65535 -)
      * Scale: 1

@@ -44,6 +44,22 @@
  *    produce by pushing lambda2 towards its barrier. 0 and 0 = off.
  *    (Fixed point: ff_gain_per_s * period_s < 1, else PMA_ERR_FIXED_RANGE.)
  * Output: u = clamp(u_ff + u_law, u_min, u_max).
+ *
+ * Funnel widening (widen_r > 0; beyond the paper, off by default): where the
+ * paper's law would reach its barrier, the guarantee cannot hold (the task asks
+ * for more than the plant gives) and the law's gain is unbounded there. Instead
+ * of the clamp, channel i's funnel is widened: w_i becomes w_i / g_i, with g_i
+ * set on that step so that |r_i| = widen_r exactly (g_i is multiplied by
+ * widen_r / |r_i|), and flag WIDEN1/2. The funnel then shrinks back to w_i
+ * over t_u with the tuning function's shape:
+ *   g_i(t) = 1 - (1 - k_i) (0.5 + 0.5 cos(pi (t - t_i) / t_u))  for t - t_i < t_u,
+ * 1 afterwards, where k_i and t_i are the scale and time of the last widening.
+ * So r_i never reaches the barrier, the loop gain stays that of |r| <= widen_r,
+ * and the law keeps tracking as close as the plant allows; the guarantee is
+ * back in force t_u after the last widening. r_i = lambda_i g_i / w_i, and
+ * beta = sec^2 g2 / w2. Each widening is a lost guarantee for the caller to
+ * report (the application's monitor). The clamp stays as a backstop (g_i is
+ * kept at or above 2^-20).
  */
 #ifndef PMA_PPC_H
 #define PMA_PPC_H
@@ -63,6 +79,8 @@ typedef struct pma_ppc_config {
     float soft_barrier_r;   /* (0, 1]; 1 = off (paper's law) */
     float ff_gain_per_s;    /* >= 0 [1/s]; 0 = off */
     float ff_init;          /* initial feedforward [input unit], within [u_min, u_max] */
+    float widen_r;          /* funnel widening instead of the clamp: 0 = off (paper's law), else
+                             * in [0.05, 1 - barrier_margin) (see "Funnel widening" above) */
     float period_s;         /* control period > 0 [s] (used by the feedforward only) */
     uint8_t band_enabled;   /* 1: check the constraint band below at init */
     float k_low_cm;         /* constraint band k_low < x < k_high [cm] */
@@ -83,10 +101,14 @@ int pma_ppc_validate_config(const pma_ppc_config_t *cfg);
 #define PMA_PPC_FLAG_SAT_LOW  0x08u   /* output clamped at u_min */
 #define PMA_PPC_FLAG_SOFT1    0x10u   /* lambda1 beyond the soft-barrier point */
 #define PMA_PPC_FLAG_SOFT2    0x20u   /* lambda2 beyond the soft-barrier point */
+#define PMA_PPC_FLAG_WIDEN1   0x40u   /* widen_r: w1's funnel widened this step (instead of a clamp) */
+#define PMA_PPC_FLAG_WIDEN2   0x80u   /* widen_r: w2's funnel widened this step (instead of a clamp) */
+#define PMA_PPC_FLAG_WIDE     0x100u  /* widen_r: a funnel is still wider than assigned (g < 1) */
 
 /* Internals of the last step, for telemetry (float variant). */
 typedef struct pma_ppc_out_f32 {
     float alpha, e_cm, lambda1_cm, chi, theta_cm_s, lambda2_cm_s, delta, beta_s_cm;
+    float g1, g2;           /* funnel scales: the funnels are w1 / g1, w2 / g2 (1 = as assigned) */
     float u_law;            /* -c beta delta, before feedforward and clamp */
     float u_ff;             /* feedforward term (0 when off) */
     float u;                /* output applied */
@@ -100,6 +122,9 @@ typedef struct pma_ppc_f32 {
     float soft_tan, soft_sec2;  /* tan and sec^2 of (pi/2) soft_r */
     /* state */
     float u_ff;
+    float widen_k[2], widen_t_s[2]; /* g_i and the time [s] of channel i's last widening */
+    uint32_t widen_bits;            /* bit 2: widening on; bit i (0, 1): channel i wider than
+                                     * assigned. One word for the step's common case */
     uint32_t breaches1, breaches2;  /* steps with a barrier clamp, since reset */
     pma_ppc_out_f32_t out;
     uint8_t ready;
@@ -126,6 +151,7 @@ typedef struct pma_ppc_out_q16 {
     pma_q16_t e_cm, lambda1_cm, chi, theta_cm_s, lambda2_cm_s, delta, beta_s_cm;
     pma_q16_t u_law, u_ff, u;
     uint32_t flags;
+    pma_q30_t g1, g2;               /* funnel scales, Q2.30 (as the float variant) */
 } pma_ppc_out_q16_t;
 
 typedef struct pma_ppc_q16 {
@@ -139,7 +165,14 @@ typedef struct pma_ppc_q16 {
     /* state */
     int64_t u_ff_q32;               /* feedforward accumulator, 32 fractional bits */
     uint32_t breaches1, breaches2;
+    uint32_t widen_bits;            /* bit 2: widening on; bit i (0, 1): channel i wider than
+                                     * assigned. One word for the step's common case */
     pma_ppc_out_q16_t out;
+    /* funnel widening, rarely used: after the step's hot fields, which the Cortex-M0 reaches
+     * with one load only within 124 bytes of the instance */
+    pma_q30_t widen_r;              /* 0: widening off */
+    pma_q30_t widen_k[2];           /* g_i at channel i's last widening, Q2.30 */
+    pma_q16_t widen_t_s[2];         /* its time [s] */
     uint8_t ready;
 } pma_ppc_q16_t;
 
