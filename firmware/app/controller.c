@@ -63,6 +63,8 @@ int pma_ctrl_start(pma_ctrl_t *s, const pma_params_t *p, float period_s)
         c->period_s = period_s;
         s->fallback_mode = (uint8_t)p->ppc_fallback;
         c->widen_r = s->fallback_mode == PMA_PPC_FALLBACK_WIDEN ? p->ppc_widen_r : 0.0f;
+        /* a clamp run as long as the one the monitor calls lost (and ppc.fallback 0 faults) */
+        c->widen2_steps = p->safety_barrier_ticks;
         c->band_enabled = (uint8_t)(p->ppc_band_check != 0);
         c->k_low_cm = p->safety_x_min_cm;
         c->k_high_cm = p->safety_x_max_cm;

@@ -176,13 +176,15 @@ static void test_soft_barrier(void)
     TEST_ASSERT_EQUAL_HEX32(soft.out.flags, softq.out.flags);
 }
 
-/* Funnel widening (widen_r): where the law would clamp, the funnel widens so that |r| = widen_r
- * (flags WIDEN1/2, WIDE; no barrier flag, bounded gain), then shrinks back to w over t_u with
- * the tuning function's shape; float and fixed point agree. */
+/* Funnel widening (widen_r; widen2_steps 1: lambda2 at once too): where the law would clamp,
+ * the funnel widens so that |r| = widen_r (flags WIDEN1/2, WIDE; no barrier flag, bounded
+ * gain), then shrinks back to w over t_u with the tuning function's shape; float and fixed
+ * point agree. */
 static void test_funnel_widening(void)
 {
     pma_ppc_config_t c = case3();
     c.widen_r = 0.5f;
+    c.widen2_steps = 1;
     pma_ppc_f32_t f;
     pma_ppc_q16_t q;
     TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_f32(&f, &c));
@@ -239,6 +241,50 @@ static void test_funnel_widening(void)
     TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_f32(&f, 20.0f, -1.97f, 0.0f, -2.0f, &u));
     TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_q16(&q, Q16(20.0), Q16(-1.97), 0, Q16(-2.0), &uq));
     TEST_ASSERT_TRUE(f.out.g1 == 1.0f && q.out.g1 == PMA_Q30_ONE);
+}
+
+/* lambda2's funnel widens only after widen2_steps consecutive steps at its clamp (until then
+ * the paper's clamp, BARRIER2); a step inside the clamp starts the count again; with
+ * widen2_steps 0 lambda2 never widens. lambda1's widens at once. Both arithmetics. */
+static void test_velocity_funnel_widens_after_a_run(void)
+{
+    for (uint32_t steps = 0; steps <= 3; steps += 3) {
+        pma_ppc_config_t c = case3();
+        c.widen_r = 0.5f;
+        c.widen2_steps = steps;
+        pma_ppc_f32_t f;
+        pma_ppc_q16_t q;
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_f32(&f, &c));
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_q16(&q, &c));
+        float u;
+        pma_q16_t uq;
+        /* after t_u, e = 0 (chi = 0, theta = 0), v = 2 cm/s = 4 w2: lambda2 beyond its clamp;
+         * then v = 0.1 (inside); then the run again */
+        const float v[] = {2.0f, 2.0f, 0.1f, 2.0f, 2.0f, 2.0f, 2.0f};
+        for (int k = 0; k < 7; ++k) {
+            const float t = 10.0f + 0.001f * (float)k;
+            TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_f32(&f, t, -2.0f, v[k], -2.0f, &u));
+            TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_q16(&q, Q16(t), Q16(-2.0), Q16(v[k]),
+                                                           Q16(-2.0), &uq));
+            /* the third step of the second run (k = 5) widens when widen2_steps is 3 */
+            const int widens = steps == 3 && k == 5;
+            const int wide = steps == 3 && k >= 5;
+            const uint32_t want = (v[k] > 1.0f && !widens && !wide ? PMA_PPC_FLAG_BARRIER2 : 0u) |
+                                  (widens ? PMA_PPC_FLAG_WIDEN2 : 0u) |
+                                  (wide ? PMA_PPC_FLAG_WIDE : 0u);
+            TEST_ASSERT_EQUAL_HEX32(want, f.out.flags & ~(PMA_PPC_FLAG_SAT_HIGH | PMA_PPC_FLAG_SAT_LOW));
+            TEST_ASSERT_EQUAL_HEX32(f.out.flags, q.out.flags);
+        }
+        if (steps == 3) {
+            /* widened to 0.5 / 4 = 0.125; 1 ms of t_u = 2 s later it has barely grown back */
+            assert_near(f.out.g2, 0.125, 1e-3);
+            assert_near(f.out.g2, F30(q.out.g2), 1e-5);
+        } else {
+            TEST_ASSERT_TRUE(f.out.g2 == 1.0f && q.out.g2 == PMA_Q30_ONE);
+            TEST_ASSERT_EQUAL_INT(6, f.breaches2);
+            TEST_ASSERT_EQUAL_INT(6, q.breaches2);
+        }
+    }
 }
 
 /* Feedforward switch: off keeps u_ff = 0; on integrates the law's output,
@@ -416,6 +462,7 @@ int main(void)
     RUN_TEST(test_alpha_profile);
     RUN_TEST(test_law_direction_and_equations);
     RUN_TEST(test_barrier_clamp);
+    RUN_TEST(test_velocity_funnel_widens_after_a_run);
     RUN_TEST(test_soft_barrier);
     RUN_TEST(test_funnel_widening);
     RUN_TEST(test_feedforward);

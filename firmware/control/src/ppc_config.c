@@ -14,7 +14,7 @@ void pma_ppc_default_config(pma_ppc_config_t *cfg)
         .a_cm_s = 2.0f, .c = 2.0f, .w1_cm = 0.2f, .w2_cm_s = 0.5f, .t_u_s = 2.0f,
         .u_min = -400.0f, .u_max = 400.0f,
         .barrier_margin = 1e-3f, .soft_barrier_r = 1.0f,
-        .ff_gain_per_s = 0.0f, .ff_init = 0.0f, .widen_r = 0.0f, .period_s = 1e-3f,
+        .ff_gain_per_s = 0.0f, .ff_init = 0.0f, .widen_r = 0.0f, .widen2_steps = 0, .period_s = 1e-3f,
         .band_enabled = 1, .k_low_cm = -3.0f, .k_high_cm = 0.0f,
     };
 }

@@ -27,7 +27,7 @@ int pma_ppc_init_f32(pma_ppc_f32_t *s, const pma_ppc_config_t *cfg)
     return PMA_OK;
 }
 
-#define WIDEN_ON 4u   /* widen_bits: widening on */
+#define WIDEN_ON 4u   /* widen_bits: channel 0 widens (WIDEN_ON << 1: channel 1) */
 
 void pma_ppc_reset_f32(pma_ppc_f32_t *s)
 {
@@ -37,7 +37,9 @@ void pma_ppc_reset_f32(pma_ppc_f32_t *s)
         s->widen_k[i] = 1.0f;
         s->widen_t_s[i] = 0.0f;
     }
-    s->widen_bits = s->cfg.widen_r > 0.0f ? WIDEN_ON : 0u;
+    s->widen_bits = 0u;
+    if (s->cfg.widen_r > 0.0f) s->widen_bits = WIDEN_ON | (s->cfg.widen2_steps ? WIDEN_ON << 1 : 0u);
+    s->clamp_run2 = 0;
     s->breaches1 = 0;
     s->breaches2 = 0;
     s->out = (pma_ppc_out_f32_t){0};
@@ -83,15 +85,19 @@ static float widen_scale(pma_ppc_f32_t *s, int i, float t_s)
 }
 
 /* r_i = raw g_i of channel i (0: lambda1, 1: lambda2; raw = lambda_i / w_i) where its funnel
- * is wider than assigned or widening is on and raw is at the clamp: where |r_i| reaches the
- * clamp, the channel widens so that |r_i| = widen_r (flag WIDEN1/2). Writes g_i (and flag
+ * is wider than assigned or the channel widens and raw is at the clamp: where |r_i| reaches
+ * the clamp (lambda2: for widen2_steps steps in a row), its funnel widens so that
+ * |r_i| = widen_r (flag WIDEN1/2). Writes g_i (and flag
  * WIDE while g_i < 1); the clamp itself is transform's. */
 static float channel_r_wide(pma_ppc_f32_t *s, int i, float t_s, float raw, float *g,
                             uint32_t *flags)
 {
     float k = (s->widen_bits & (1u << i)) ? widen_scale(s, i, t_s) : 1.0f;
     const float ar = fabsf(raw * k);
-    if ((s->widen_bits & WIDEN_ON) && ar >= s->r_max) {
+    const int at_clamp = (s->widen_bits & (WIDEN_ON << i)) && ar >= s->r_max;
+    if (i == 1) s->clamp_run2 = at_clamp ? s->clamp_run2 + (s->clamp_run2 != UINT32_MAX) : 0u;
+    if (at_clamp && (i == 0 || s->clamp_run2 >= s->cfg.widen2_steps)) {
+        if (i == 1) s->clamp_run2 = 0;
         k = fmaxf(k * (s->cfg.widen_r / ar), WIDEN_K_MIN);
         s->widen_k[i] = k;
         s->widen_t_s[i] = t_s;
@@ -109,7 +115,8 @@ static inline float channel_r(pma_ppc_f32_t *s, int i, float t_s, float raw, flo
                               uint32_t *flags)
 {
     const uint32_t bits = s->widen_bits;
-    if (!(bits & (1u << i)) && (!(bits & WIDEN_ON) || fabsf(raw) < s->r_max)) {
+    if (!(bits & (1u << i)) && (!(bits & (WIDEN_ON << i)) || fabsf(raw) < s->r_max)) {
+        if (i == 1) s->clamp_run2 = 0;
         *g = 1.0f;
         return raw;
     }

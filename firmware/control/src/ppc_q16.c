@@ -49,6 +49,7 @@ int pma_ppc_init_q16(pma_ppc_q16_t *s, const pma_ppc_config_t *cfg)
     s->ff_k = pma_to_q(ff_k, 30);
     s->r_max = pma_to_q(1.0f - cfg->barrier_margin, 30);
     s->widen_r = pma_to_q(cfg->widen_r, 30);
+    s->widen2_steps = cfg->widen2_steps;
     s->soft_r = soft_r;
     s->soft_tan = (pma_q16_t)soft_tan;
     s->soft_sec2 = (pma_q16_t)soft_sec2;
@@ -57,7 +58,7 @@ int pma_ppc_init_q16(pma_ppc_q16_t *s, const pma_ppc_config_t *cfg)
     return PMA_OK;
 }
 
-#define WIDEN_ON 4u   /* widen_bits: widening on */
+#define WIDEN_ON 4u   /* widen_bits: channel 0 widens (WIDEN_ON << 1: channel 1) */
 
 void pma_ppc_reset_q16(pma_ppc_q16_t *s)
 {
@@ -69,7 +70,9 @@ void pma_ppc_reset_q16(pma_ppc_q16_t *s)
     }
     s->breaches1 = 0;
     s->breaches2 = 0;
-    s->widen_bits = s->widen_r > 0 ? WIDEN_ON : 0u;
+    s->widen_bits = 0u;
+    if (s->widen_r > 0) s->widen_bits = WIDEN_ON | (s->widen2_steps ? WIDEN_ON << 1 : 0u);
+    s->clamp_run2 = 0;
     s->out = (pma_ppc_out_q16_t){0};
     s->out.u_ff = s->ff_init;
     s->out.g1 = PMA_Q30_ONE;   /* the step's common case does not write them */
@@ -129,8 +132,9 @@ static pma_q30_t widen_scale(pma_ppc_q16_t *s, int i, pma_q16_t t)
 
 /* r_i = lambda_i g_i / w_i of channel i (0: lambda1, 1: lambda2) in Q2.30 where its funnel is
  * wider than assigned or r_i is at the clamp (the common case is inline in the step): where
- * widening is on and |r_i| reaches the clamp, the channel widens so that |r_i| = widen_r; then
- * clamped to +-r_max (flag BARRIER1/2). Writes the scale g_i (and flag WIDE while g_i < 1). */
+ * the channel widens and |r_i| reaches the clamp (lambda2: for widen2_steps steps in a row),
+ * its funnel widens so that |r_i| = widen_r (flag WIDEN1/2); then clamped to +-r_max (flag
+ * BARRIER1/2). Writes the scale g_i (and flag WIDE while g_i < 1). */
 static pma_q30_t channel_r_wide(pma_ppc_q16_t *s, int i, pma_q16_t t, int64_t lambda_q24,
                                 int32_t inv_w_q24, int64_t r_plain, pma_q30_t *g,
                                 uint32_t *flags)
@@ -142,7 +146,10 @@ static pma_q30_t channel_r_wide(pma_ppc_q16_t *s, int i, pma_q16_t t, int64_t la
         r = raw_r(lambda_q24, widened_inv_w(inv_w_q24, *g));
     }
     const int64_t ar = r < 0 ? -r : r;
-    if (s->widen_r > 0 && ar >= s->r_max) {
+    const int at_clamp = (s->widen_bits & (WIDEN_ON << i)) && ar >= s->r_max;
+    if (i == 1) s->clamp_run2 = at_clamp ? s->clamp_run2 + (s->clamp_run2 != UINT32_MAX) : 0u;
+    if (at_clamp && (i == 0 || s->clamp_run2 >= s->widen2_steps)) {
+        if (i == 1) s->clamp_run2 = 0;
         int64_t k = ((int64_t)*g * s->widen_r) / ar;      /* Q60 / Q30: Q30 */
         if (k < WIDEN_K_MIN) k = WIDEN_K_MIN;
         *g = (pma_q30_t)k;
@@ -163,8 +170,13 @@ static inline pma_q30_t channel_r(pma_ppc_q16_t *s, uint32_t widen_bits, int i, 
                                   pma_q30_t *g, uint32_t *flags)
 {
     if (!(widen_bits & (1u << i))) {
-        if (r < s->r_max && r > -(int64_t)s->r_max) return (pma_q30_t)r;
-        if (!(widen_bits & WIDEN_ON)) return clamp_r(s, r, flags, PMA_PPC_FLAG_BARRIER1 << i);
+        if (r < s->r_max && r > -(int64_t)s->r_max) {
+            if (i == 1) s->clamp_run2 = 0;
+            return (pma_q30_t)r;
+        }
+        if (!(widen_bits & (WIDEN_ON << i))) {
+            return clamp_r(s, r, flags, PMA_PPC_FLAG_BARRIER1 << i);
+        }
     }
     return channel_r_wide(s, i, t, lambda_q24, inv_w_q24, r, g, flags);
 }

@@ -48,7 +48,12 @@
  * Funnel widening (widen_r > 0; beyond the paper, off by default): where the
  * paper's law would reach its barrier, the guarantee cannot hold (the task asks
  * for more than the plant gives) and the law's gain is unbounded there. Instead
- * of the clamp, channel i's funnel is widened: w_i becomes w_i / g_i, with g_i
+ * of the clamp, channel i's funnel is widened: lambda1's at the step it reaches
+ * the clamp (the position error at its funnel: the guarantee is lost), lambda2's
+ * only after widen2_steps consecutive steps at its clamp (a law with a tight w2
+ * lives at its velocity barrier in short runs and keeps |e| < w1 there: only a
+ * lasting clamp is a loss; widen2_steps 0 keeps lambda2's clamp always). The
+ * funnel is widened so: w_i becomes w_i / g_i, with g_i
  * set on that step so that |r_i| = widen_r exactly (g_i is multiplied by
  * widen_r / |r_i|), and flag WIDEN1/2. The funnel then shrinks back to w_i
  * over t_u with the tuning function's shape:
@@ -81,6 +86,8 @@ typedef struct pma_ppc_config {
     float ff_init;          /* initial feedforward [input unit], within [u_min, u_max] */
     float widen_r;          /* funnel widening instead of the clamp: 0 = off (paper's law), else
                              * in [0.05, 1 - barrier_margin) (see "Funnel widening" above) */
+    uint32_t widen2_steps;  /* with widen_r: lambda2's funnel widens after this many consecutive
+                             * steps at its clamp (0: never, 1: at once); lambda1's at once */
     float period_s;         /* control period > 0 [s] (used by the feedforward only) */
     uint8_t band_enabled;   /* 1: check the constraint band below at init */
     float k_low_cm;         /* constraint band k_low < x < k_high [cm] */
@@ -123,8 +130,9 @@ typedef struct pma_ppc_f32 {
     /* state */
     float u_ff;
     float widen_k[2], widen_t_s[2]; /* g_i and the time [s] of channel i's last widening */
-    uint32_t widen_bits;            /* bit 2: widening on; bit i (0, 1): channel i wider than
-                                     * assigned. One word for the step's common case */
+    uint32_t widen_bits;            /* bits 2 + i: channel i widens; bit i (0, 1): channel i
+                                     * wider than assigned. One word for the step's common case */
+    uint32_t clamp_run2;            /* consecutive steps of lambda2 at its clamp (widen2_steps) */
     uint32_t breaches1, breaches2;  /* steps with a barrier clamp, since reset */
     pma_ppc_out_f32_t out;
     uint8_t ready;
@@ -165,12 +173,13 @@ typedef struct pma_ppc_q16 {
     /* state */
     int64_t u_ff_q32;               /* feedforward accumulator, 32 fractional bits */
     uint32_t breaches1, breaches2;
-    uint32_t widen_bits;            /* bit 2: widening on; bit i (0, 1): channel i wider than
-                                     * assigned. One word for the step's common case */
+    uint32_t widen_bits;            /* bits 2 + i: channel i widens; bit i (0, 1): channel i
+                                     * wider than assigned. One word for the step's common case */
     pma_ppc_out_q16_t out;
     /* funnel widening, rarely used: after the step's hot fields, which the Cortex-M0 reaches
      * with one load only within 124 bytes of the instance */
     pma_q30_t widen_r;              /* 0: widening off */
+    uint32_t widen2_steps, clamp_run2;  /* as the float variant's */
     pma_q30_t widen_k[2];           /* g_i at channel i's last widening, Q2.30 */
     pma_q16_t widen_t_s[2];         /* its time [s] */
     uint8_t ready;
