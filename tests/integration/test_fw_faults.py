@@ -15,7 +15,14 @@ from test_fw_lib import (
     CAN_ERR_DLC,
     CAN_ERR_FLAG,
     COUNTS_MID,
+    CTRL_BARRIER1,
+    CTRL_FALLBACK,
+    CTRL_GUARANTEE_LOST,
+    CTRL_WIDE,
+    CTRL_WIDEN1,
     FAULT,
+    HB_FALLBACK,
+    HB_GUARANTEE_LOST,
     PROTO,
     RESET,
     RESULT,
@@ -298,8 +305,11 @@ def test_barrier_fault_after_barrier_ticks_consecutive_clamps(firmware, bus) -> 
 
 
 def test_barrier_fault_disabled(firmware, bus) -> None:
+    """The paper's law at its barrier with the BARRIER fault off (safety.barrier_ticks 0, and no
+    funnel widening or hand-over, ppc.fallback 0): it clamps on and the node keeps RUNNING."""
     fw, node = start(firmware, bus, node=NODE)
     node.set("safety.barrier_ticks", 0)
+    node.set("ppc.fallback", 0)
     node.set("ppc.t_u_s", 0.2)
     node.set("telem.decimation", 1)
     node.set("telem.mask", 0x10)
@@ -311,6 +321,41 @@ def test_barrier_fault_disabled(firmware, bus) -> None:
     rig.tick(far, host_heartbeat=True)
     assert node.wait_for("TELEM_E")["Breaches"] > 100
     assert fresh_heartbeat(node)["State"] == STATE["RUNNING"]
+    fw.stop()
+
+
+def test_funnel_widening_instead_of_the_barrier(firmware, bus) -> None:
+    """ppc.fallback at its default 2 (WIDEN), the same task (the position held 1.3 cm from the
+    reference): the position funnel widens instead of its clamp (CtrlFlags WIDEN1, then WIDE),
+    the guarantee's loss is flagged from that tick (CtrlFlags bit 14, HEARTBEAT
+    GUARANTEE_LOST), and since the muscle does not move the funnel meets the error again within
+    t_u: MFAC takes over (bit 15, FALLBACK). No fault: the node keeps RUNNING."""
+    fw, node = start(firmware, bus, node=NODE)
+    assert node.get("ppc.fallback") == 2
+    node.set("ctrl.mode", 1)
+    node.set("ref.kind", 0)
+    node.set("ref.offset_cm", -1.5)
+    node.set("ppc.t_u_s", 0.2)
+    node.set("telem.decimation", 1)
+    node.set("telem.mask", 0x10)                       # TELEM_E only
+    far = cm_to_counts(-0.2)
+    rig = arm_and_start(node, Rig(node, counts=far), settle_ticks=2)
+    seen = 0
+    for _tick in range(1, 2000):
+        assert rig.tick(far, host_heartbeat=True)["OutputActive"] == 1
+        flags = node.wait_for("TELEM_E")["CtrlFlags"]
+        if not seen & CTRL_GUARANTEE_LOST and flags & CTRL_GUARANTEE_LOST:
+            assert flags & CTRL_WIDEN1, hex(flags)     # the first lost tick is the widening
+        seen |= flags
+        if flags & CTRL_FALLBACK:      # from here on the low bits are MFAC's flags
+            break
+        assert not flags & CTRL_BARRIER1, hex(flags)   # never the position funnel's clamp
+    else:
+        pytest.fail(f"no hand-over to MFAC (flags seen {seen:#x})")
+    assert seen & CTRL_WIDE and seen & CTRL_GUARANTEE_LOST, hex(seen)
+    hb = fresh_heartbeat(node)
+    assert hb["State"] == STATE["RUNNING"] and hb["FaultCode"] == 0
+    assert hb["Flags"] & HB_GUARANTEE_LOST and hb["Flags"] & HB_FALLBACK, hex(hb["Flags"])
     fw.stop()
 
 

@@ -42,6 +42,14 @@ HB_CAN_PASSIVE = 0x0020
 HB_SENSOR_VALID = 0x0040
 HB_REF_ACTIVE = 0x0080
 HB_SAVE_FAILED = 0x0100
+HB_GUARANTEE_LOST = 0x0200
+HB_FALLBACK = 0x0400
+# TELEM_E CtrlFlags bits (docs/controllers.md): the paper's law's and the application's
+CTRL_BARRIER1 = 0x0001
+CTRL_WIDEN1 = 0x0040
+CTRL_WIDE = 0x0100
+CTRL_GUARANTEE_LOST = 0x4000
+CTRL_FALLBACK = 0x8000
 
 EXIT_POWER_CUT = 85           # PMA_HAL_LINUX_EXIT_POWER_CUT (hal/portable/linux/pma_hal_linux.h)
 
