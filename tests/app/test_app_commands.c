@@ -480,6 +480,16 @@ static void test_start_refused_bad_params(void)
     TEST_ASSERT_LESS_THAN(0, command(PMA_CMD_START, 0).result);
     assert_state(app.state, PMA_STATE_ARMED);
     set_f32(PMA_PARAM_VEL_FC_HZ, 30.0f);
+    /* ppc.widen_r must lie below the clamp, 1 - ppc.barrier_margin (with ppc.fallback WIDEN);
+     * the paper's law without widening (ppc.fallback 0) takes the wide margin */
+    set_f32(PMA_PARAM_PPC_BARRIER_MARGIN, 0.5f);
+    command_ok(PMA_CMD_START, 0, PMA_ERR_RANGE);
+    assert_state(app.state, PMA_STATE_ARMED);
+    set_u32(PMA_PARAM_PPC_FALLBACK, PMA_PPC_FALLBACK_NONE);
+    command_ok(PMA_CMD_START, 0, PMA_OK);
+    command_ok(PMA_CMD_STOP, 0, PMA_OK);
+    set_u32(PMA_PARAM_PPC_FALLBACK, PMA_PPC_FALLBACK_WIDEN);
+    set_f32(PMA_PARAM_PPC_BARRIER_MARGIN, 1e-3f);
     command_ok(PMA_CMD_START, 0, PMA_OK);
 }
 
