@@ -33,10 +33,6 @@ void pma_ppc_reset_f32(pma_ppc_f32_t *s)
 {
     if (s == NULL) return;
     s->u_ff = s->cfg.ff_init;
-    for (int i = 0; i < 2; ++i) {
-        s->widen_k[i] = 1.0f;
-        s->widen_t_s[i] = 0.0f;
-    }
     s->widen_bits = 0u;
     if (s->cfg.widen_r > 0.0f) s->widen_bits = WIDEN_ON | (s->cfg.widen2_steps ? WIDEN_ON << 1 : 0u);
     s->clamp_run2 = 0;
@@ -70,18 +66,23 @@ static float transform(const pma_ppc_f32_t *s, float r, float *sec2, uint32_t *f
 
 #define WIDEN_K_MIN (1.0f / 1048576.0f)   /* 2^-20: the widening's floor */
 
-/* Funnel scale g_i at t (ppc.h, "Funnel widening") of a channel wider than assigned; t_u after
- * its last widening the funnel is as assigned again (the step's common case again). */
+/* The tuning function alpha(t) (eq. 15): 0.5 - 0.5 cos(pi t / t_u) before t_u, 1 from t_u on. */
+static float tuning_alpha(const pma_ppc_f32_t *s, float t_s)
+{
+    return (t_s < s->cfg.t_u_s) ? 0.5f - 0.5f * pma_cos_pi_f32(t_s / s->cfg.t_u_s) : 1.0f;
+}
+
+/* Funnel scale g_i at t (ppc.h, "Funnel widening") of a channel wider than assigned:
+ * g = 1 - (1 - k)(1 - alpha(t - t_i)), the tuning function from the widening on; t_u after it
+ * the funnel is as assigned again (the step's common case again). */
 static float widen_scale(pma_ppc_f32_t *s, int i, float t_s)
 {
     const float dt = t_s - s->widen_t_s[i];
     if (!(dt < s->cfg.t_u_s)) {
-        s->widen_k[i] = 1.0f;
         s->widen_bits &= ~(1u << i);
         return 1.0f;
     }
-    const float dt_frac = dt > 0.0f ? dt / s->cfg.t_u_s : 0.0f;
-    return 1.0f - (1.0f - s->widen_k[i]) * (0.5f + 0.5f * pma_cos_pi_f32(dt_frac));
+    return 1.0f - (1.0f - s->widen_k[i]) * (1.0f - tuning_alpha(s, fmaxf(dt, 0.0f)));
 }
 
 /* r_i = raw g_i of channel i (0: lambda1, 1: lambda2; raw = lambda_i / w_i) where its funnel
@@ -135,7 +136,7 @@ int pma_ppc_step_f32(pma_ppc_f32_t *s, float t_s, float x_cm, float v_cm_s, floa
 
     pma_ppc_out_f32_t o;   /* every field is set below (not zeroed: a memset call per step) */
     o.flags = 0;
-    o.alpha = (t_s < s->cfg.t_u_s) ? 0.5f - 0.5f * pma_cos_pi_f32(t_s / s->cfg.t_u_s) : 1.0f; /* 15 */
+    o.alpha = tuning_alpha(s, t_s);                                           /* 15 */
     o.e_cm = x_cm - xr_cm;                                                    /* 8 */
     o.lambda1_cm = o.alpha * o.e_cm;                                          /* 16 */
     if (!isfinite(o.lambda1_cm)) return PMA_ERR_NOT_FINITE;   /* inputs too far apart */

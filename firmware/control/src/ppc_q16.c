@@ -64,10 +64,6 @@ void pma_ppc_reset_q16(pma_ppc_q16_t *s)
 {
     if (s == NULL) return;
     s->u_ff_q32 = (int64_t)s->ff_init * 65536;
-    for (int i = 0; i < 2; ++i) {
-        s->widen_k[i] = PMA_Q30_ONE;
-        s->widen_t_s[i] = 0;
-    }
     s->breaches1 = 0;
     s->breaches2 = 0;
     s->widen_bits = 0u;
@@ -113,21 +109,29 @@ static int32_t widened_inv_w(int32_t inv_w_q24, pma_q30_t g)
 
 #define WIDEN_K_MIN ((pma_q30_t)1 << 10)   /* 2^-20: the widening's floor */
 
-/* Funnel scale g_i at t, Q2.30 (ppc.h, "Funnel widening"); t_u after the last widening the
- * funnel is as assigned again (widen_k back to 1: the step's common case again). */
+/* The tuning function alpha(t) (eq. 15) in Q2.30: 0 at t <= 0, 1 from t_u on. */
+static pma_q30_t tuning_alpha(const pma_ppc_q16_t *s, pma_q16_t t)
+{
+    if (t <= 0) return 0;                      /* exact bumpless start */
+    if (t >= s->t_u) return PMA_Q30_ONE;
+    int64_t x = pma_rshift_round(pma_mul32(t, s->inv_t_u_q24), 10);   /* t/t_u, Q30 */
+    if (x > PMA_Q30_ONE) x = PMA_Q30_ONE;
+    return (PMA_Q30_ONE - pma_q30_cos_pi((pma_q30_t)x)) / 2;          /* 15 */
+}
+
+/* Funnel scale g_i at t, Q2.30 (ppc.h, "Funnel widening") of a channel wider than assigned:
+ * g = 1 - (1 - k)(1 - alpha(t - t_i)), the tuning function from the widening on; t_u after it
+ * the funnel is as assigned again (the step's common case again). */
 static pma_q30_t widen_scale(pma_ppc_q16_t *s, int i, pma_q16_t t)
 {
-    const pma_q30_t k = s->widen_k[i];
     const pma_q16_t dt = pma_q16_ssub(t, s->widen_t_s[i]);
     if (dt >= s->t_u) {
-        s->widen_k[i] = PMA_Q30_ONE;
         s->widen_bits &= ~(1u << i);
         return PMA_Q30_ONE;
     }
-    int64_t x = dt > 0 ? pma_rshift_round(pma_mul32(dt, s->inv_t_u_q24), 10) : 0;  /* dt/t_u, Q30 */
-    if (x > PMA_Q30_ONE) x = PMA_Q30_ONE;
-    const int64_t h = ((int64_t)PMA_Q30_ONE + pma_q30_cos_pi((pma_q30_t)x)) / 2;    /* Q30 */
-    return (pma_q30_t)(PMA_Q30_ONE - pma_rshift_round((int64_t)(PMA_Q30_ONE - k) * h, 30));
+    const int64_t rest = PMA_Q30_ONE - tuning_alpha(s, dt);                     /* Q30 */
+    return (pma_q30_t)(PMA_Q30_ONE -
+                       pma_rshift_round((int64_t)(PMA_Q30_ONE - s->widen_k[i]) * rest, 30));
 }
 
 /* r_i = lambda_i g_i / w_i of channel i (0: lambda1, 1: lambda2) in Q2.30 where its funnel is
@@ -141,7 +145,7 @@ static pma_q30_t channel_r_wide(pma_ppc_q16_t *s, int i, pma_q16_t t, int64_t la
 {
     int64_t r = r_plain;   /* r with the funnel as assigned */
     *g = PMA_Q30_ONE;
-    if (s->widen_k[i] < PMA_Q30_ONE) {
+    if (s->widen_bits & (1u << i)) {
         *g = widen_scale(s, i, t);
         r = raw_r(lambda_q24, widened_inv_w(inv_w_q24, *g));
     }
@@ -197,15 +201,6 @@ static pma_q16_t transform(const pma_ppc_q16_t *s, pma_q30_t r, pma_q16_t *sec2,
         *sec2 = pma_q16_sadd(PMA_Q16_ONE, pma_q16_smul(t, t));
     }
     return r < 0 ? pma_q16_sneg(t) : t;
-}
-
-static pma_q30_t tuning_alpha(const pma_ppc_q16_t *s, pma_q16_t t)
-{
-    if (t <= 0) return 0;                      /* exact bumpless start */
-    if (t >= s->t_u) return PMA_Q30_ONE;
-    int64_t x = pma_rshift_round(pma_mul32(t, s->inv_t_u_q24), 10);   /* t/t_u, Q30 */
-    if (x > PMA_Q30_ONE) x = PMA_Q30_ONE;
-    return (PMA_Q30_ONE - pma_q30_cos_pi((pma_q30_t)x)) / 2;          /* 15 */
 }
 
 int pma_ppc_step_q16(pma_ppc_q16_t *s, pma_q16_t t_s, pma_q16_t x_cm, pma_q16_t v_cm_s,

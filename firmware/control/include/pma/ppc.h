@@ -129,7 +129,8 @@ typedef struct pma_ppc_f32 {
     float soft_tan, soft_sec2;  /* tan and sec^2 of (pi/2) soft_r */
     /* state */
     float u_ff;
-    float widen_k[2], widen_t_s[2]; /* g_i and the time [s] of channel i's last widening */
+    float widen_k[2], widen_t_s[2]; /* g_i and the time [s] of channel i's last widening
+                                     * (meaningful while channel i is wide, widen_bits) */
     uint32_t widen_bits;            /* bits 2 + i: channel i widens; bit i (0, 1): channel i
                                      * wider than assigned. One word for the step's common case */
     uint32_t clamp_run2;            /* consecutive steps of lambda2 at its clamp (widen2_steps) */
@@ -180,7 +181,7 @@ typedef struct pma_ppc_q16 {
      * with one load only within 124 bytes of the instance */
     pma_q30_t widen_r;              /* 0: widening off */
     uint32_t widen2_steps, clamp_run2;  /* as the float variant's */
-    pma_q30_t widen_k[2];           /* g_i at channel i's last widening, Q2.30 */
+    pma_q30_t widen_k[2];           /* g_i at channel i's last widening, Q2.30 (while wide) */
     pma_q16_t widen_t_s[2];         /* its time [s] */
     uint8_t ready;
 } pma_ppc_q16_t;
