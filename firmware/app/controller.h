@@ -134,12 +134,13 @@ int pma_ctrl_stream_arith(pma_ctrl_t *s, float target_cm);
  *    law's error e = x_hat - x_r passes the sensor's noise and quantisation
  *    to u only through the observer's low-pass.
  *  - ppc.ref_ff (input unit per cm) with ppc.ref_ff_lead_s: a reference
- *    feedforward added to the law's output (and the sum clamped to
- *    ctrl.u_min..u_max), u_rff = ref_ff ((x_r - x_r(0)) + lead x_r'), x_r(0)
- *    the reference at START: the input the static map predicts for the
- *    reference taken `lead` ahead, so that the law and its feedforward
- *    integrator (whose clamp to the input range bounds its wind-up) correct
- *    only what the map does not predict. Off (0) in the paper's law. */
+ *    feedforward added to the law's output inside its clamp to
+ *    ctrl.u_min..u_max (pma_ppc_step_ext_*: the flags and the feedforward
+ *    integrator's anti-windup see the sum), u_rff = ref_ff ((x_r - x_r(0)) +
+ *    lead x_r'), x_r(0) the reference at START: the input the static map
+ *    predicts for the reference taken `lead` ahead, so that the law and its
+ *    feedforward integrator correct only what the map does not predict. Off
+ *    (0) in the paper's law. */
 int pma_ctrl_start(pma_ctrl_t *s, const pma_params_t *p, float period_s);
 
 /* One step at control time t_s with position x_cm; openloop_u is the live

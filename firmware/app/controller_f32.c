@@ -79,15 +79,16 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
             /* the options (controller.h) choose the law's inputs */
             const float x_law_cm = s->ppc_obs_pos ? s->vel.xh : x_cm;
             const float v_law_cm_s = s->ppc_ref_vel ? o->v_cm_s - o->xr_dot_cm_s : o->v_cm_s;
-            CHECK(pma_ppc_step_f32(&s->c.ppc, t_s, x_law_cm, v_law_cm_s, o->xr_cm, &out));
+            float u_ref = 0.0f;   /* the reference feedforward, inside the law's clamp */
             if (s->ref_ff_u_per_cm != 0.0f) {
                 if (!s->xr0_set) {
                     s->xr0_cm = o->xr_cm;
                     s->xr0_set = 1;
                 }
                 const float ahead_cm = (o->xr_cm - s->xr0_cm) + s->ref_ff_lead_s * o->xr_dot_cm_s;
-                out = clampf(out + s->ref_ff_u_per_cm * ahead_cm, s->u_min, s->u_max);
+                u_ref = s->ref_ff_u_per_cm * ahead_cm;
             }
+            CHECK(pma_ppc_step_ext_f32(&s->c.ppc, t_s, x_law_cm, v_law_cm_s, o->xr_cm, u_ref, &out));
             o->flags = s->c.ppc.out.flags;
             o->internal1 = s->c.ppc.out.lambda1_cm;
             o->internal2 = s->c.ppc.out.lambda2_cm_s;

@@ -125,7 +125,7 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
             /* the options (controller.h) choose the law's inputs */
             const pma_q16_t x_law = s->ppc_obs_pos ? q32_to_q16(s->vel.xh_q32) : x;
             const pma_q16_t v_law = s->ppc_ref_vel ? pma_q16_ssub(o->v_cm_s, o->xr_dot_cm_s) : o->v_cm_s;
-            CHECK(pma_ppc_step_q16(&s->c.ppc, t, x_law, v_law, o->xr_cm, &out));
+            pma_q16_t u_ref = 0;   /* the reference feedforward, inside the law's clamp */
             if (s->q_ref_ff_u_per_cm != 0) {
                 if (!s->xr0_set) {
                     s->q_xr0_cm = o->xr_cm;
@@ -133,9 +133,9 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
                 }
                 const pma_q16_t ahead = pma_q16_sadd(pma_q16_ssub(o->xr_cm, s->q_xr0_cm),
                                                      pma_q16_smul(s->q_ref_ff_lead_s, o->xr_dot_cm_s));
-                out = pma_q16_clamp(pma_q16_sadd(out, pma_q16_smul(s->q_ref_ff_u_per_cm, ahead)),
-                                    s->q_u_min, s->q_u_max);
+                u_ref = pma_q16_smul(s->q_ref_ff_u_per_cm, ahead);
             }
+            CHECK(pma_ppc_step_ext_q16(&s->c.ppc, t, x_law, v_law, o->xr_cm, u_ref, &out));
             flags = s->c.ppc.out.flags;
             o->internal1 = s->c.ppc.out.lambda1_cm;
             o->internal2 = s->c.ppc.out.lambda2_cm_s;

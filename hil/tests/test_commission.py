@@ -177,6 +177,36 @@ def test_loop_margins_of_a_known_loop():
     assert m["phase_margin_deg"] == pytest.approx(90.0 - math.degrees(0.5), abs=0.5)
 
 
+def test_integral_loop_gain_max_of_a_pure_delay():
+    # K e^{-theta s} / s: PM = 90 deg - K theta and GM = pi / (2 K theta): both limits (45 deg, 2)
+    # meet at K = pi / (4 theta)
+    assert rules.integral_loop_gain_max(1e-9, 0.05) == pytest.approx(math.pi / 0.2, rel=0.01)
+
+
+@pytest.mark.parametrize("gain, tau, theta", [(0.00148, 0.061, 0.034), (0.0051, 0.16, 0.065),
+                                              (0.02, 0.3, 0.1), (0.0005, 0.02, 0.005)])
+def test_mfac_gains_keep_the_margins_at_the_measured_gain(gain, tau, theta):
+    m = rules.mfac_gains(gain, tau, theta, 1e-3, ki_per_tick=5.0)
+    assert m.margins["phase_margin_deg"] >= rules.PM_MIN_DEG - 0.5
+    assert m.margins["gain_margin"] >= rules.GM_MIN - 0.01
+    assert m.lam >= rules.MFAC_LAMBDA
+    k_paper = rules.MFAC_RHO * gain**2 / ((rules.MFAC_LAMBDA + gain**2) * 1e-3)
+    k_max = rules.integral_loop_gain_max(tau, theta)
+    if k_paper <= k_max:        # the paper's lambda keeps them: unchanged
+        assert m.lam == rules.MFAC_LAMBDA and m.k_loop_per_s == pytest.approx(k_paper)
+    else:                       # raised just as far as the margins need
+        assert m.k_loop_per_s == pytest.approx(k_max, rel=1e-6)
+    # phi(1): MFAC's first steps at the PI's integral gain, with that lambda
+    assert rules.MFAC_RHO * m.phi1 / (m.lam + m.phi1**2) == pytest.approx(5.0, rel=1e-6)
+
+
+def test_mfac_gains_raise_lambda_on_a_stiff_slow_loop():
+    """A high gain with a long lag (the slow valve of dmsp10): the paper's lambda would make the
+    integral loop unstable there, so it is raised."""
+    m = rules.mfac_gains(0.0051, 0.16, 0.065, 1e-3, ki_per_tick=2.0)
+    assert m.lam > 3 * rules.MFAC_LAMBDA
+
+
 def test_mfac_phi1_gives_the_integral_gain():
     for ki in (1.0, 20.0, 100.0):
         phi = mfac_phi1(ki)

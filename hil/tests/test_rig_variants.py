@@ -16,8 +16,9 @@ What must hold on every variant, whether or not the paper's guarantee can (docs/
   measured stroke), it holds;
 - where it is lost, the firmware says so: the GUARANTEE_LOST flag in TELEM_E from the lost tick
   on; the hand-over to MFAC (FALLBACK), if any, comes no earlier;
-- the lane tracks at least about as well as MFAC on its own commissioned set on the same rig:
-  its RMSTE within MFAC_SLACK of MFAC's in every window.
+- the lane tracks at least as well as MFAC on its own commissioned set on the same rig: its
+  RMSTE at most MFAC's in every window (MFAC_SLACK: level within 0.1 %, two lanes held at the
+  same input limit).
 
     .venv/bin/python -m pytest -q hil/tests/test_rig_variants.py
 """
@@ -35,7 +36,7 @@ from hil.commissioned import commission_offline
 from hil.reference import reference_function
 
 VARIANTS = sorted(p.stem for p in (Path(scn.__file__).parent / "scenarios/variants").glob("*.toml"))
-MFAC_SLACK = 1.25   # at most 25 % above MFAC's RMSTE in a window (docs/hil.md)
+MFAC_SLACK = 1.001  # at most MFAC's RMSTE in every window, level within 0.1 % (docs/hil.md)
 JOBS = 2
 
 pytestmark = pytest.mark.slow
@@ -102,7 +103,7 @@ def test_guarantee_holds_where_feasible_or_its_loss_is_flagged(variant_runs, nam
 
 
 @pytest.mark.parametrize("name", VARIANTS)
-def test_paper_controller_tracks_about_as_well_as_mfac(variant_runs, name):
+def test_paper_controller_tracks_at_least_as_well_as_mfac(variant_runs, name):
     _, s = variant_runs[name]
     for w, ppc, mfac in zip(s["windows"], s["rmste"]["ppc"], s["rmste"]["mfac"]):
         assert ppc <= MFAC_SLACK * mfac, f"{name} {w}: ppc {ppc:.4f} cm, mfac {mfac:.4f} cm"

@@ -330,6 +330,68 @@ static void test_feedforward(void)
     TEST_ASSERT_TRUE(on.u_ff == 10.0f);
 }
 
+/* An input added by the caller (pma_ppc_step_ext_*, the application's reference feedforward)
+ * is inside the clamp: the flags and the feedforward's anti-windup see the whole output, so a
+ * reference beyond the plant's reach keeps the input at its limit while the law pushes there
+ * (the feedforward winds past u_min by u_ext, no further), in both arithmetics. */
+static void test_external_input(void)
+{
+    pma_ppc_config_t c = case3();
+    c.u_min = -400.0f;
+    c.u_max = 400.0f;
+    c.ff_gain_per_s = 400.0f;          /* 0.4 per step: the run below winds up in 10^4 steps */
+    c.ff_init = 0.0f;
+    pma_ppc_f32_t a, b;
+    pma_ppc_q16_t aq, bq;
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_f32(&a, &c));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_f32(&b, &c));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_q16(&aq, &c));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_q16(&bq, &c));
+    float u, ub;
+    pma_q16_t uq, ubq;
+    /* u_ext = 0 is the plain step, bit for bit */
+    for (int k = 0; k < 200; ++k) {
+        const float t = 1e-3f * (float)k, x = -1.9f + 1e-4f * (float)k;
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_f32(&a, t, x, 0.1f, -2.0f, &u));
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_ext_f32(&b, t, x, 0.1f, -2.0f, 0.0f, &ub));
+        TEST_ASSERT_TRUE(u == ub && a.u_ff == b.u_ff);
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_q16(&aq, Q16(t), Q16(x), Q16(0.1), Q16(-2.0), &uq));
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_ext_q16(&bq, Q16(t), Q16(x), Q16(0.1), Q16(-2.0), 0, &ubq));
+        TEST_ASSERT_EQUAL_INT(uq, ubq);
+    }
+    /* the sum is clamped and flagged */
+    pma_ppc_reset_f32(&b);
+    pma_ppc_reset_q16(&bq);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_ext_f32(&b, 5.0f, -2.0f, 0.0f, -2.0f, 1000.0f, &u));
+    TEST_ASSERT_TRUE(u == 400.0f && (b.out.flags & PMA_PPC_FLAG_SAT_HIGH));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_ext_q16(&bq, Q16(5.0), Q16(-2.0), 0, Q16(-2.0), Q16(1000.0), &uq));
+    TEST_ASSERT_TRUE(uq == Q16(400.0) && (bq.out.flags & PMA_PPC_FLAG_SAT_HIGH));
+    /* out of reach: e = +0.1 cm for good (v such that lambda2 = 0.1 cm/s: u_law = -1.4), the law
+     * pushes u down; u_ext = +50 */
+    pma_ppc_reset_f32(&b);
+    pma_ppc_reset_q16(&bq);
+    for (int k = 0; k < 10000; ++k) {
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_ext_f32(&b, 5.0f, -1.9f, -1.9f, -2.0f, 50.0f, &u));
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_ext_q16(&bq, Q16(5.0), Q16(-1.9), Q16(-1.9), Q16(-2.0), Q16(50.0), &uq));
+    }
+    TEST_ASSERT_TRUE(u == -400.0f && (b.out.flags & PMA_PPC_FLAG_SAT_LOW));
+    TEST_ASSERT_TRUE(uq == Q16(-400.0) && (bq.out.flags & PMA_PPC_FLAG_SAT_LOW));
+    TEST_ASSERT_TRUE(b.u_ff < -400.0f && b.u_ff >= -450.0f);     /* past u_min, by u_ext at most */
+    assert_near(F16(bq.out.u_ff), b.u_ff, 0.5);
+    /* the reference moves on (u_ext 80): the input goes back to its limit, not 30 above it */
+    for (int k = 0; k < 100; ++k) {
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_ext_f32(&b, 5.0f, -1.9f, -1.9f, -2.0f, 80.0f, &u));
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_ext_q16(&bq, Q16(5.0), Q16(-1.9), Q16(-1.9), Q16(-2.0), Q16(80.0), &uq));
+    }
+    TEST_ASSERT_TRUE(u == -400.0f && uq == Q16(-400.0));
+    TEST_ASSERT_TRUE(b.u_ff >= -480.0f);
+    /* a non-finite u_ext is refused, state unchanged */
+    const float held = b.u_ff;
+    u = 7.0f;
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_NOT_FINITE, pma_ppc_step_ext_f32(&b, 5.0f, -1.9f, -1.9f, -2.0f, NAN, &u));
+    TEST_ASSERT_TRUE(u == 7.0f && b.u_ff == held);
+}
+
 static void expect_invalid(pma_ppc_config_t c, int want)
 {
     pma_ppc_f32_t f;
@@ -466,6 +528,7 @@ int main(void)
     RUN_TEST(test_soft_barrier);
     RUN_TEST(test_funnel_widening);
     RUN_TEST(test_feedforward);
+    RUN_TEST(test_external_input);
     RUN_TEST(test_invalid_config);
     RUN_TEST(test_bad_step_inputs);
     RUN_TEST(test_fixed_matches_float);

@@ -124,12 +124,13 @@ static inline float channel_r(pma_ppc_f32_t *s, int i, float t_s, float raw, flo
     return channel_r_wide(s, i, t_s, raw, g, flags);
 }
 
-int pma_ppc_step_f32(pma_ppc_f32_t *s, float t_s, float x_cm, float v_cm_s, float xr_cm,
-                     float *u)
+int pma_ppc_step_ext_f32(pma_ppc_f32_t *s, float t_s, float x_cm, float v_cm_s, float xr_cm,
+                         float u_ext, float *u)
 {
     if (s == NULL || u == NULL) return PMA_ERR_NULL;
     if (!s->ready) return PMA_ERR_NOT_READY;
-    if (!isfinite(t_s) || !isfinite(x_cm) || !isfinite(v_cm_s) || !isfinite(xr_cm)) {
+    if (!isfinite(t_s) || !isfinite(x_cm) || !isfinite(v_cm_s) || !isfinite(xr_cm) ||
+        !isfinite(u_ext)) {
         return PMA_ERR_NOT_FINITE;
     }
     if (t_s < 0.0f) return PMA_ERR_RANGE;
@@ -155,7 +156,7 @@ int pma_ppc_step_f32(pma_ppc_f32_t *s, float t_s, float x_cm, float v_cm_s, floa
     o.u_law = -s->cfg.c * o.beta_s_cm * o.delta;                              /* 20 */
 
     o.u_ff = s->u_ff;
-    const float v = o.u_ff + o.u_law;
+    const float v = o.u_ff + o.u_law + u_ext;   /* the clamp and anti-windup see the whole output */
     if (v > s->cfg.u_max) {
         o.flags |= PMA_PPC_FLAG_SAT_HIGH;
         o.u = s->cfg.u_max;
@@ -172,7 +173,8 @@ int pma_ppc_step_f32(pma_ppc_f32_t *s, float t_s, float x_cm, float v_cm_s, floa
         !((o.flags & PMA_PPC_FLAG_SAT_HIGH) && o.u_law > 0.0f) &&
         !((o.flags & PMA_PPC_FLAG_SAT_LOW) && o.u_law < 0.0f)) {
         float ff = s->u_ff + s->cfg.ff_gain_per_s * s->cfg.period_s * o.u_law;
-        s->u_ff = fminf(fmaxf(ff, s->cfg.u_min), s->cfg.u_max);
+        /* bounded so that u_ff + u_ext stays within the input range (its wind-up bound) */
+        s->u_ff = fminf(fmaxf(ff, s->cfg.u_min - u_ext), s->cfg.u_max - u_ext);
     }
     if (o.flags & PMA_PPC_FLAG_BARRIER1) s->breaches1++;
     if (o.flags & PMA_PPC_FLAG_BARRIER2) s->breaches2++;

@@ -203,8 +203,8 @@ static pma_q16_t transform(const pma_ppc_q16_t *s, pma_q30_t r, pma_q16_t *sec2,
     return r < 0 ? pma_q16_sneg(t) : t;
 }
 
-int pma_ppc_step_q16(pma_ppc_q16_t *s, pma_q16_t t_s, pma_q16_t x_cm, pma_q16_t v_cm_s,
-                     pma_q16_t xr_cm, pma_q16_t *u)
+int pma_ppc_step_ext_q16(pma_ppc_q16_t *s, pma_q16_t t_s, pma_q16_t x_cm, pma_q16_t v_cm_s,
+                         pma_q16_t xr_cm, pma_q16_t u_ext, pma_q16_t *u)
 {
     if (s == NULL || u == NULL) return PMA_ERR_NULL;
     if (!s->ready) return PMA_ERR_NOT_READY;
@@ -234,8 +234,11 @@ int pma_ppc_step_q16(pma_ppc_q16_t *s, pma_q16_t t_s, pma_q16_t x_cm, pma_q16_t 
     o->beta_s_cm = pma_q16_sat64(pma_rshift_round(pma_mul32(sec2, inv_w2), 24));  /* 21 */
     o->u_law = pma_q16_sneg(pma_q16_smul(pma_q16_smul(s->c, o->beta_s_cm), o->delta)); /* 20 */
 
-    o->u_ff = pma_q16_sat64(pma_rshift_round(s->u_ff_q32, 16));
-    const pma_q16_t v = pma_q16_sadd(o->u_ff, o->u_law);
+    /* without the feedforward out.u_ff keeps ff_init from reset: no 64-bit rounding per step */
+    if (s->ff_k > 0) o->u_ff = pma_q16_sat64(pma_rshift_round(s->u_ff_q32, 16));
+    /* the clamp and anti-windup see the whole output (saturating sums) */
+    pma_q16_t v = pma_q16_sadd(o->u_ff, o->u_law);
+    if (u_ext != 0) v = pma_q16_sadd(v, u_ext);
     if (v > s->u_max) {
         o->flags |= PMA_PPC_FLAG_SAT_HIGH;
         o->u = s->u_max;
@@ -250,7 +253,8 @@ int pma_ppc_step_q16(pma_ppc_q16_t *s, pma_q16_t t_s, pma_q16_t x_cm, pma_q16_t 
         !((o->flags & PMA_PPC_FLAG_SAT_HIGH) && o->u_law > 0) &&
         !((o->flags & PMA_PPC_FLAG_SAT_LOW) && o->u_law < 0)) {
         int64_t ff = s->u_ff_q32 + pma_rshift_round(pma_mul32(o->u_law, s->ff_k), 14); /* Q32 */
-        const int64_t lo = (int64_t)s->u_min * 65536, hi = (int64_t)s->u_max * 65536;
+        /* bounded so that u_ff + u_ext stays within the input range (its wind-up bound) */
+        const int64_t lo = ((int64_t)s->u_min - u_ext) * 65536, hi = ((int64_t)s->u_max - u_ext) * 65536;
         s->u_ff_q32 = ff < lo ? lo : (ff > hi ? hi : ff);
     }
     if (o->flags & PMA_PPC_FLAG_BARRIER1) s->breaches1++;

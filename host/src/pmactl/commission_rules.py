@@ -39,6 +39,7 @@ NOISE_SIGMAS_IN_W1 = 6.0     # w1 must hold 6 standard deviations of the positio
 # only for steps that moved MOVED_SIGMAS of them in all (a smaller one is mostly noise)
 MOVE_SIGMAS, MOVED_SIGMAS = 4.0, 10.0
 MFAC_ETA, MFAC_MU, MFAC_RHO, MFAC_LAMBDA = 0.5, 1.9, 31.7, 0.03   # the paper's MFAC gains
+LAMBDA_MIN = 1e-6            # mfac.lambda's range starts there
 
 
 class CommissionError(ValueError):
@@ -197,7 +198,7 @@ def loop_margins(kc: float, ki: float, kd: float, gain: float, tau_s: float, the
 
 
 def mfac_phi1(ki_per_tick: float, rho: float = MFAC_RHO, lam: float = MFAC_LAMBDA) -> float:
-    """MFAC's phi(1) whose step gain rho phi / (lambda + phi^2) equals the loop's integral gain
+    """MFAC's phi(1) whose step gain rho phi / (lambda + phi^2) equals the given integral gain
     per tick (the smaller root: MFAC starts gentle; at most sqrt(lambda), its largest gain)."""
     if ki_per_tick <= 0:
         raise CommissionError("the integral gain must be positive")
@@ -205,6 +206,47 @@ def mfac_phi1(ki_per_tick: float, rho: float = MFAC_RHO, lam: float = MFAC_LAMBD
     if disc <= 0:
         return math.sqrt(lam)
     return (rho - math.sqrt(disc)) / (2.0 * ki_per_tick)
+
+
+def integral_loop_gain_max(tau_s: float, theta_s: float) -> float:
+    """The largest integral loop gain K [1/s] (the loop K e^{-theta s} / (s (tau s + 1))) that keeps
+    PM_MIN_DEG and GM_MIN: bisection on the margins, which fall as K rises."""
+    def ok(k: float) -> bool:
+        mg = loop_margins(0.0, k, 0.0, 1.0, tau_s, theta_s)
+        return mg["phase_margin_deg"] >= PM_MIN_DEG and mg["gain_margin"] >= GM_MIN
+    lo, hi = 0.1, 1e4            # within loop_margins' frequency grid (from 0.01 rad/s)
+    if not ok(lo):
+        raise CommissionError("no integral loop keeps the margins on the measured lag")
+    for _ in range(60):
+        mid = math.sqrt(lo * hi)
+        lo, hi = (mid, hi) if ok(mid) else (lo, mid)
+    return lo
+
+
+@dataclass
+class MfacGains:
+    phi1: float
+    lam: float
+    k_loop_per_s: float          # the integral loop gain rho g^2 / ((lambda + g^2) T) at phi = g
+    margins: dict[str, float]
+
+
+def mfac_gains(gain: float, tau_s: float, theta_eff_s: float, period_s: float, ki_per_tick: float) -> MfacGains:
+    """MFAC on the measured FOPDT. Its phi estimates dy/du and settles, for inputs slower than
+    the lag, near the measured gain g; with phi = g its step is an integral controller of
+    rho g / (lambda + g^2) per tick, the loop's integral gain K = rho g^2 / ((lambda + g^2) T).
+    lambda: the paper's, unless that K would cost PM_MIN_DEG or GM_MIN on the measured lag and
+    dead time; then just large enough for the largest K that keeps them (the margins returned
+    are the loop's at phi = g). phi(1): the smaller root that gives MFAC's first steps the PI's
+    integral gain ki_per_tick (mfac_phi1, with that lambda)."""
+    if gain <= 0 or period_s <= 0:
+        raise CommissionError("the gain and the period must be positive")
+    k_max = integral_loop_gain_max(tau_s, theta_eff_s)
+    g2 = gain * gain
+    lam = max(MFAC_LAMBDA, MFAC_RHO * g2 / (k_max * period_s) - g2)
+    k = MFAC_RHO * g2 / ((lam + g2) * period_s)
+    return MfacGains(phi1=mfac_phi1(ki_per_tick, lam=lam), lam=lam, k_loop_per_s=k,
+                     margins=loop_margins(0.0, k / gain, 0.0, gain, tau_s, theta_eff_s))
 
 
 @dataclass
@@ -302,7 +344,7 @@ def derive(m: Measured, task: Task) -> Derivation:
         return polarity * (p_kpa - p0) / m.kpa_per_u
     u_lo, u_hi = sorted((u_of(m.p_min_kpa), u_of(m.p_max_kpa)))
     u_start = u_of(m.static_map.hold_kpa(x_start))
-    phi1 = mfac_phi1(ki * m.period_s)
+    mfac = mfac_gains(gain, tau, theta_eff, m.period_s, ki * m.period_s)
     # the reference feedforward: the static map's slope over the reachable band (the input per cm
     # that holds the muscle a cm further, a least-squares line through the holding inputs), taken
     # tau + theta ahead for the lag and dead time of the step responses
@@ -348,8 +390,8 @@ def derive(m: Measured, task: Task) -> Derivation:
         "mfac.eta": MFAC_ETA,
         "mfac.mu": MFAC_MU,
         "mfac.rho": MFAC_RHO,
-        "mfac.lambda": MFAC_LAMBDA,
-        "mfac.phi1": round(phi1, 5),
+        "mfac.lambda": round(mfac.lam, 5),
+        "mfac.phi1": round(mfac.phi1, 5),
         "mfac.u_init": round(u_start, 2),
         "safety.x_min_cm": task.x_min_cm,
         "safety.x_max_cm": task.x_max_cm,
@@ -358,5 +400,9 @@ def derive(m: Measured, task: Task) -> Derivation:
                "theta_first_move_s": theta_move, "theta_eff_s": theta_eff, "tau_c_s": tau_c,
                "noise_cm": m.noise_cm, "stroke_min_cm": lo, "stroke_max_cm": hi, "hysteresis_kpa_at_p0": hold_hyst,
                "kc_u_per_cm": kc, "tau_i_s": tau_i, "k_p_per_s": k_p, "k_v_u_per_cm_s": k_v, "w1_min_cm": w1_min,
-               "v_max_cm_s": v_max, "t_u_min_s": t_u_min}
+               "v_max_cm_s": v_max, "t_u_min_s": t_u_min,
+               "mfac_k_loop_per_s": mfac.k_loop_per_s,
+               "mfac_phase_margin_deg": mfac.margins["phase_margin_deg"],
+               "mfac_gain_margin": mfac.margins["gain_margin"],
+               "mfac_delay_margin_s": mfac.margins["delay_margin_s"]}
     return Derivation(params=params, figures=figures, margins=margins, promises=promises, warnings=warnings)

@@ -39,11 +39,16 @@
  *  - ff_gain_per_s >= 0 with ff_init: a steady-state input feedforward u_ff,
  *    starting at ff_init, that integrates the law's output
  *    (u_ff += ff_gain_per_s * period_s * u_law) while the output is not
- *    saturated in the same direction, clamped to [u_min, u_max]. It supplies
+ *    saturated in the same direction, clamped so that u_ff + u_ext stays in
+ *    [u_min, u_max] (u_ext below; 0: u_ff itself in [u_min, u_max]). It supplies
  *    the steady pressure that the law (no integral action) can otherwise only
  *    produce by pushing lambda2 towards its barrier. 0 and 0 = off.
  *    (Fixed point: ff_gain_per_s * period_s < 1, else PMA_ERR_FIXED_RANGE.)
- * Output: u = clamp(u_ff + u_law, u_min, u_max).
+ * Output: u = clamp(u_ff + u_law + u_ext, u_min, u_max), with u_ext an input
+ * the caller adds (pma_ppc_step_ext_*: the application's reference
+ * feedforward; 0 in pma_ppc_step_*). The clamp's flags and the feedforward's
+ * anti-windup see the whole output: a reference beyond the plant's reach keeps
+ * the input at its limit, not the law's share of it.
  *
  * Funnel widening (widen_r > 0; beyond the paper, off by default): where the
  * paper's law would reach its barrier, the guarantee cannot hold (the task asks
@@ -150,8 +155,16 @@ void pma_ppc_reset_f32(pma_ppc_f32_t *s);
  * itself is unchanged: firmware/app/controller.h.)
  * Non-finite inputs: returns PMA_ERR_NOT_FINITE, *u and state unchanged.
  * Returns PMA_OK, or a negative code. */
-int pma_ppc_step_f32(pma_ppc_f32_t *s, float t_s, float x_cm, float v_cm_s,
-                     float xr_cm, float *u);
+int pma_ppc_step_ext_f32(pma_ppc_f32_t *s, float t_s, float x_cm, float v_cm_s,
+                         float xr_cm, float u_ext, float *u);
+/* The same step with u_ext [input unit] added to the law's output before the
+ * clamp (see "Output" above); a non-finite u_ext: PMA_ERR_NOT_FINITE.
+ * pma_ppc_step_f32 is the step with u_ext = 0. */
+static inline int pma_ppc_step_f32(pma_ppc_f32_t *s, float t_s, float x_cm, float v_cm_s,
+                                   float xr_cm, float *u)
+{
+    return pma_ppc_step_ext_f32(s, t_s, x_cm, v_cm_s, xr_cm, 0.0f, u);
+}
 
 /* Fixed-point variant: same config (converted and range-checked at init),
  * signals in Q16.16 with the same units, dimensionless r and alpha in Q2.30. */
@@ -189,7 +202,12 @@ typedef struct pma_ppc_q16 {
 int pma_ppc_init_q16(pma_ppc_q16_t *s, const pma_ppc_config_t *cfg);
 void pma_ppc_reset_q16(pma_ppc_q16_t *s);
 /* t_s in Q16.16 seconds (>= 0; up to 9.1 h), others Q16.16 as in the float variant. */
-int pma_ppc_step_q16(pma_ppc_q16_t *s, pma_q16_t t_s, pma_q16_t x_cm, pma_q16_t v_cm_s,
-                     pma_q16_t xr_cm, pma_q16_t *u);
+int pma_ppc_step_ext_q16(pma_ppc_q16_t *s, pma_q16_t t_s, pma_q16_t x_cm, pma_q16_t v_cm_s,
+                         pma_q16_t xr_cm, pma_q16_t u_ext, pma_q16_t *u);
+static inline int pma_ppc_step_q16(pma_ppc_q16_t *s, pma_q16_t t_s, pma_q16_t x_cm,
+                                   pma_q16_t v_cm_s, pma_q16_t xr_cm, pma_q16_t *u)
+{
+    return pma_ppc_step_ext_q16(s, t_s, x_cm, v_cm_s, xr_cm, 0, u);
+}
 
 #endif /* PMA_PPC_H */
