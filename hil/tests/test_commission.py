@@ -200,6 +200,16 @@ def test_mfac_gains_keep_the_margins_at_the_measured_gain(gain, tau, theta):
     assert rules.MFAC_RHO * m.phi1 / (m.lam + m.phi1**2) == pytest.approx(5.0, rel=1e-6)
 
 
+def test_mfac_gains_on_a_loop_too_slow_for_any_margin_say_so():
+    """A dead time of 20 s: no integral loop above the bisection's floor keeps the margins; the
+    gains are still derived and the derivation warns instead of refusing the rig."""
+    m = rules.mfac_gains(0.005, 1.0, 20.0, 1e-3, ki_per_tick=0.01)
+    assert m.margins["phase_margin_deg"] < rules.PM_MIN_DEG or m.margins["gain_margin"] < rules.GM_MIN
+    meas = _measured(theta=20.0, tau=1.0)
+    d = derive(meas, TASK)
+    assert any("MFAC's integral loop" in w for w in d.warnings)
+
+
 def test_mfac_gains_raise_lambda_on_a_stiff_slow_loop():
     """A high gain with a long lag (the slow valve of dmsp10): the paper's lambda would make the
     integral loop unstable there, so it is raised."""
