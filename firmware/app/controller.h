@@ -59,7 +59,7 @@ typedef struct pma_ctrl {
         pma_pid_q16_t pid;
     } c;
     pma_mfac_q16_t shadow;  /* MFAC beside the PPC (fallback), as below */
-    pma_q16_t q_period_s, q_u_min, q_u_max, q_w1_cm, q_t_u_s;
+    pma_q16_t q_period_s, q_w1_cm, q_t_u_s;
     pma_q16_t q_ref_ff_u_per_cm, q_ref_ff_lead_s, q_xr0_cm;
     pma_ctrl_out_q16_t q_out;
 #else

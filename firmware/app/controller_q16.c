@@ -42,8 +42,9 @@ static pma_q16_t q16_abs(pma_q16_t a)
 int pma_ctrl_init_arith(pma_ctrl_t *s, const pma_ctrl_setup_t *su)
 {
     CHECK(to_q16(s->period_s, &s->q_period_s));
-    CHECK(to_q16(s->u_min, &s->q_u_min));
-    CHECK(to_q16(s->u_max, &s->q_u_max));
+    pma_q16_t q_limit;   /* the input range must fit Q16.16 whatever the mode (else START refuses) */
+    CHECK(to_q16(s->u_min, &q_limit));
+    CHECK(to_q16(s->u_max, &q_limit));
     CHECK(pma_ref_init_q16(&s->ref, &s->ref_cfg));
     CHECK(pma_velest_init_q16(&s->vel, &su->vel));
     switch (s->mode) {

@@ -153,13 +153,12 @@ void pma_ppc_reset_f32(pma_ppc_f32_t *s);
  * (The application's options ppc.ref_vel and ppc.obs_pos feed x' - x_r' as
  * v_cm_s and the velocity observer's position estimate as x_cm; the law
  * itself is unchanged: firmware/app/controller.h.)
+ * u_ext [input unit]: added to the law's output before the clamp (see "Output"
+ * above); pma_ppc_step_f32 is the step with u_ext = 0.
  * Non-finite inputs: returns PMA_ERR_NOT_FINITE, *u and state unchanged.
  * Returns PMA_OK, or a negative code. */
 int pma_ppc_step_ext_f32(pma_ppc_f32_t *s, float t_s, float x_cm, float v_cm_s,
                          float xr_cm, float u_ext, float *u);
-/* The same step with u_ext [input unit] added to the law's output before the
- * clamp (see "Output" above); a non-finite u_ext: PMA_ERR_NOT_FINITE.
- * pma_ppc_step_f32 is the step with u_ext = 0. */
 static inline int pma_ppc_step_f32(pma_ppc_f32_t *s, float t_s, float x_cm, float v_cm_s,
                                    float xr_cm, float *u)
 {
