@@ -342,6 +342,10 @@ class Runner:
             try:
                 for _ in range(max(1, round(self.sc.settle_s / self.period_s))):
                     self.tick_lane(lane)
+                # what the node sent before its last settle tick is stale: a heartbeat it sent
+                # (on its wall clock) while the wiring was being set may show the sensor before
+                # the scalings' first tick, and commissioning starts from the node's status
+                bus.rx.clear()
                 node = PmaNode(bus, lane.node, self.proto, timeout_s=self.opts.reply_timeout_s, host_heartbeat_s=0.1)
                 progress = self._commission_progress(label) if self.opts.progress else None
                 result = Commissioning(node, task_of(self.sc, label), progress=progress).run()

@@ -6,6 +6,7 @@
 #include <stddef.h>
 
 #include "pma/status.h"
+#include "pma/finite.h"
 
 int pma_actuator_validate(const pma_actuator_config_t *c)
 {
@@ -13,7 +14,7 @@ int pma_actuator_validate(const pma_actuator_config_t *c)
     const float all[] = {c->p0_kpa, c->kpa_per_u, c->p_min_kpa, c->p_max_kpa, c->slew_kpa_s,
                          c->safe_kpa};
     for (size_t i = 0; i < sizeof all / sizeof all[0]; ++i) {
-        if (!isfinite(all[i])) return PMA_ERR_NOT_FINITE;
+        if (!pma_isfinite_f32(all[i])) return PMA_ERR_NOT_FINITE;
     }
     if (c->polarity != 1 && c->polarity != -1) return PMA_ERR_RANGE;
     if (!(c->p_min_kpa >= 0.0f && c->p_min_kpa < c->p_max_kpa)) return PMA_ERR_RANGE;
@@ -30,7 +31,7 @@ float pma_actuator_safe_kpa(const pma_actuator_config_t *c, float p_prev_kpa)
 {
     switch (c->safe_mode) {
     case PMA_SAFE_HOLD:
-        return (isfinite(p_prev_kpa) && p_prev_kpa >= 0.0f) ? p_prev_kpa : 0.0f;
+        return (pma_isfinite_f32(p_prev_kpa) && p_prev_kpa >= 0.0f) ? p_prev_kpa : 0.0f;
     case PMA_SAFE_FIXED:
         /* never above the actuator's limit, whatever the order the parameters were set in */
         return c->safe_kpa < c->p_max_kpa ? c->safe_kpa : c->p_max_kpa;
@@ -42,7 +43,7 @@ float pma_actuator_safe_kpa(const pma_actuator_config_t *c, float p_prev_kpa)
 float pma_actuator_active_kpa(const pma_actuator_config_t *c, float u, float p_prev_kpa,
                               float period_s)
 {
-    if (!isfinite(u) || !isfinite(p_prev_kpa)) return pma_actuator_safe_kpa(c, p_prev_kpa);
+    if (!pma_isfinite_f32(u) || !pma_isfinite_f32(p_prev_kpa)) return pma_actuator_safe_kpa(c, p_prev_kpa);
     float p = c->p0_kpa + (float)c->polarity * c->kpa_per_u * u;
     if (p < c->p_min_kpa) p = c->p_min_kpa;
     if (p > c->p_max_kpa) p = c->p_max_kpa;

@@ -3,6 +3,7 @@
  * (see scaling.h). */
 #include "scaling.h"
 #include "pma/status.h"
+#include "pma/finite.h"
 
 #include <math.h>
 #include <stddef.h>
@@ -10,7 +11,7 @@
 int pma_adc_validate_scaling(const pma_adc_scaling_t *s)
 {
     if (s == NULL) return PMA_ERR_NULL;
-    if (!isfinite(s->offset_cm) || !isfinite(s->gain_cm_per_count)) return PMA_ERR_NOT_FINITE;
+    if (!pma_isfinite_f32(s->offset_cm) || !pma_isfinite_f32(s->gain_cm_per_count)) return PMA_ERR_NOT_FINITE;
     if (s->gain_cm_per_count == 0.0f) return PMA_ERR_RANGE;
     if (s->raw_min_counts > s->raw_max_counts) return PMA_ERR_RANGE;
     if (s->wire_break_below_counts > s->raw_min_counts) return PMA_ERR_RANGE;
@@ -34,7 +35,7 @@ int pma_adc_cm_to_counts(const pma_adc_scaling_t *s, float x_cm, uint16_t *raw_c
     if (raw_counts == NULL) return PMA_ERR_NULL;
     const int rc = pma_adc_validate_scaling(s);
     if (rc != PMA_OK) return rc;
-    if (!isfinite(x_cm)) return PMA_ERR_NOT_FINITE;
+    if (!pma_isfinite_f32(x_cm)) return PMA_ERR_NOT_FINITE;
     const float v = (x_cm - s->offset_cm) / s->gain_cm_per_count;
     /* compare before converting: a float outside uint16_t's range is UB to convert */
     if (!(v > (float)s->raw_min_counts)) {

@@ -31,6 +31,7 @@
 #include <stdint.h>
 
 #include "controller.h"
+#include "output_q16.h"
 #include "params.h"
 #include "pma/hal.h"
 #include "pstore.h"
@@ -230,11 +231,23 @@ typedef struct pma_app_bridge {
     uint16_t raw_counts;           /* the last frame's sensor counts */
 } pma_app_bridge_t;
 
+/* The fixed-point output stage (output_q16.h) of the Q16.16 builds, built from the
+ * parameters in `key` (their bits); ok: it represents them (else the float functions run). */
+#define PMA_APP_OUTPUT_KEY_WORDS 13u
+typedef struct pma_app_output_q16 {
+    pma_output_q16_t stage;
+    uint32_t key[PMA_APP_OUTPUT_KEY_WORDS];
+    uint8_t built, ok;
+} pma_app_output_q16_t;
+
 /* What the actuator is driven with. */
 typedef struct pma_app_output {
     float u;                       /* the controller's output (its own units: kPa about p0) */
     float p_kpa;                   /* the pressure command */
     uint16_t dac_counts;           /* and its DAC code */
+#if PMA_CTRL_Q16
+    pma_app_output_q16_t q16;
+#endif
 } pma_app_output_t;
 
 /* Requests waiting to be handled (a ring), in the order received. */

@@ -2,6 +2,8 @@
 /* The application's input and output: which source the position comes from (the
  * ADC or the plant bridge), this tick's sample, and the pressure command to the
  * DAC or the bridge, safe whenever the output is inactive or a conversion fails. */
+#include <string.h>
+
 #include "actuator.h"
 #include "app_core.h"
 #include "generated/pma_proto.h"
@@ -61,38 +63,91 @@ void pma_app_acquire(pma_app_t *app)
     app->sensor.status = rc;
 }
 
+#if PMA_CTRL_Q16
+/* The fixed-point output stage of the parameters as they are, rebuilt when one of the
+ * values it is built from changed (their bits compared: a few instructions a tick, and no
+ * path that changes a parameter can miss it); NULL where it cannot represent them. */
+static const pma_output_q16_t *output_q16(pma_app_t *app)
+{
+    const pma_params_t *p = &app->params;
+    const float f[] = {p->act_p0_kpa, p->act_kpa_per_u, p->act_p_min_kpa, p->act_p_max_kpa,
+                       p->act_slew_kpa_s, p->safety_safe_kpa, p->dac_counts_at_zero_kpa,
+                       p->dac_counts_per_kpa, app->timing.period_s};
+    uint32_t key[PMA_APP_OUTPUT_KEY_WORDS];
+    memcpy(key, f, sizeof f);
+    key[9] = (uint32_t)p->act_polarity;
+    key[10] = p->safety_safe_mode;
+    key[11] = p->dac_min_counts;
+    key[12] = p->dac_max_counts;
+    pma_app_output_q16_t *c = &app->output.q16;
+    int same = c->built;
+    for (unsigned i = 0; same && i < PMA_APP_OUTPUT_KEY_WORDS; ++i) same = key[i] == c->key[i];
+    if (!same) {
+        pma_actuator_config_t ac;
+        pma_dac_scaling_t ds;
+        pma_app_actuator_config(p, &ac);
+        pma_app_dac_scaling(p, &ds);
+        c->ok = (uint8_t)(pma_output_q16_build(&c->stage, &ac, &ds, app->timing.period_s) == PMA_OK);
+        memcpy(c->key, key, sizeof key);
+        c->built = 1;
+    }
+    return c->ok ? &c->stage : NULL;
+}
+#endif
+
 void pma_app_write_output(pma_app_t *app)
 {
-    pma_actuator_config_t ac;
-    pma_app_actuator_config(&app->params, &ac);
+    int rc = PMA_ERR_NOT_READY;
+#if PMA_CTRL_Q16
+    /* an active output in fixed point where the stage takes the values; the float functions,
+     * which define it, otherwise (and always in float builds) */
     if (pma_app_output_active(app)) {
-        app->output.p_kpa = pma_actuator_active_kpa(&ac, app->output.u, app->output.p_kpa, app->timing.period_s);
-    } else {
-        app->output.p_kpa = pma_actuator_safe_kpa(&ac, app->output.p_kpa);
+        const pma_output_q16_t *q = output_q16(app);
+        if (q != NULL && pma_output_q16_takes(app->output.u) && pma_output_q16_takes(app->output.p_kpa)) {
+            const pma_q16_t p = pma_output_q16_kpa(q, pma_q16_from_f32(app->output.u),
+                                                   pma_q16_from_f32(app->output.p_kpa));
+            app->output.p_kpa = pma_q16_to_f32(p);
+            app->output.dac_counts = pma_output_q16_counts(q, p);
+            rc = PMA_OK;
+        }
     }
+#endif
+    pma_actuator_config_t ac;
     pma_dac_scaling_t ds;
-    pma_app_dac_scaling(&app->params, &ds);
-    uint16_t counts = app->output.dac_counts;
-    if (pma_dac_kpa_to_counts(&ds, app->output.p_kpa, &counts) == PMA_OK) {
-        app->output.dac_counts = counts;
-    } else {
-        /* unreachable while the scaling is enforced at SET (and p is finite):
-         * never keep an active pressure on the output */
-        pma_app_raise_fault(app, PMA_FAULT_OUTPUT);
-        app->output.dac_counts = 0;
+    if (rc != PMA_OK) {
+        pma_app_actuator_config(&app->params, &ac);
+        pma_app_dac_scaling(&app->params, &ds);
+        if (pma_app_output_active(app)) {
+            app->output.p_kpa = pma_actuator_active_kpa(&ac, app->output.u, app->output.p_kpa,
+                                                        app->timing.period_s);
+        } else {
+            app->output.p_kpa = pma_actuator_safe_kpa(&ac, app->output.p_kpa);
+        }
+        uint16_t counts = app->output.dac_counts;
+        rc = pma_dac_kpa_to_counts(&ds, app->output.p_kpa, &counts);
+        if (rc == PMA_OK) {
+            app->output.dac_counts = counts;
+        } else {
+            /* unreachable while the scaling is enforced at SET (and p is finite):
+             * never keep an active pressure on the output */
+            pma_app_raise_fault(app, PMA_FAULT_OUTPUT);
+            app->output.dac_counts = 0;
+        }
     }
     if (pma_app_bridge_on(app)) {
         app->tx_due |= PMA_APP_TX_ACTUATOR; /* the plant bridge's output: a frame */
         return;
     }
-    const int rc = pma_hal_dac_write(app->output.dac_counts);
-    if (rc != PMA_OK) {
+    if (pma_hal_dac_write(app->output.dac_counts) != PMA_OK) {
         /* the DAC refused the value (or failed): never leave an earlier,
          * perhaps active, command on the output. Try the safe value, and if
          * the DAC refuses that too, 0 counts (0 V / 0 mA: a regulator's
          * minimum pressure). */
         pma_app_raise_fault(app, PMA_FAULT_OUTPUT);
+        pma_app_actuator_config(&app->params, &ac);
+        pma_app_dac_scaling(&app->params, &ds);
         app->output.p_kpa = pma_actuator_safe_kpa(&ac, app->output.p_kpa);
+        uint16_t counts = 0;
         if (pma_dac_kpa_to_counts(&ds, app->output.p_kpa, &counts) != PMA_OK ||
             pma_hal_dac_write(counts) != PMA_OK) {
             counts = 0;

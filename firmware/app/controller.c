@@ -3,6 +3,7 @@
  * configurations from the parameters, the band check, the options (see
  * controller.h). The instances and the step: controller_f32.c, controller_q16.c. */
 #include "controller.h"
+#include "pma/finite.h"
 
 #include <math.h>
 #include <stddef.h>
@@ -45,7 +46,7 @@ int pma_ctrl_start(pma_ctrl_t *s, const pma_params_t *p, float period_s)
         s->ppc_obs_pos = (uint8_t)(p->ppc_obs_pos != 0);
         s->ref_ff_u_per_cm = p->ppc_ref_ff;
         s->ref_ff_lead_s = p->ppc_ref_ff_lead_s;
-        if (!isfinite(s->ref_ff_u_per_cm) || !(s->ref_ff_lead_s >= 0.0f)) return PMA_ERR_RANGE;
+        if (!pma_isfinite_f32(s->ref_ff_u_per_cm) || !(s->ref_ff_lead_s >= 0.0f)) return PMA_ERR_RANGE;
         if (s->ppc_obs_pos && su.vel.kind != PMA_VELEST_TRACKING) return PMA_ERR_RANGE;
         pma_ppc_config_t *c = &su.ppc;
         pma_ppc_default_config(c);
@@ -131,7 +132,7 @@ int pma_ctrl_stream(pma_ctrl_t *s, float target_cm, float x_min_cm, float x_max_
 {
     if (s == NULL) return PMA_ERR_NULL;
     if (s->ref_cfg.kind != PMA_REF_STREAM) return PMA_ERR_UNSUPPORTED;
-    if (!isfinite(target_cm)) return PMA_ERR_NOT_FINITE;
+    if (!pma_isfinite_f32(target_cm)) return PMA_ERR_NOT_FINITE;
     if (!(target_cm > x_min_cm + s->stream_margin_cm && target_cm < x_max_cm - s->stream_margin_cm)) {
         return PMA_ERR_RANGE;
     }

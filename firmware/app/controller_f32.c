@@ -2,6 +2,7 @@
 /* The controller slot in float (PMA_CTRL_Q16 0): the _f32 instances and the
  * step. See controller.h. */
 #include "controller.h"
+#include "pma/finite.h"
 
 #if !PMA_CTRL_Q16
 
@@ -71,10 +72,6 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
     float out = 0.0f;
     switch (s->mode) {
     case PMA_CTRL_MODE_PPC: {
-        float u_mfac = 0.0f;
-        if (s->fallback_mode != PMA_PPC_FALLBACK_NONE) {
-            CHECK(pma_mfac_step_f32(&s->shadow, x_cm, next_reference(s, t_s), &u_mfac));
-        }
         if (!s->fallback_active) {
             /* the options (controller.h) choose the law's inputs */
             const float x_law_cm = s->ppc_obs_pos ? s->vel.xh : x_cm;
@@ -95,14 +92,17 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
             o->barrier = (uint8_t)((o->flags & (PMA_PPC_FLAG_BARRIER1 | PMA_PPC_FLAG_BARRIER2)) != 0);
         }
         pma_ctrl_monitor(s, t_s, t_s >= s->t_u_s && fabsf(o->e_cm) >= s->w1_cm, o->flags);
+        /* the fallback's MFAC runs every tick: its law once it is in charge (from the tick of
+         * the hand-over), before that only its estimator, on the input the law applied */
         if (s->fallback_active) {
-            out = u_mfac;
+            CHECK(pma_mfac_step_f32(&s->shadow, x_cm, next_reference(s, t_s), &out));
             o->flags = s->shadow.flags | PMA_CTRL_FLAG_FALLBACK;
             o->internal1 = s->shadow.phi;   /* TELEM_D as in mode MFAC */
             o->internal2 = s->shadow.u1;
+        } else if (s->fallback_mode != PMA_PPC_FALLBACK_NONE) {
+            CHECK(pma_mfac_learn_f32(&s->shadow, x_cm, out));
         }
         if (s->lost) o->flags |= PMA_CTRL_FLAG_GUARANTEE_LOST;
-        if (s->fallback_mode != PMA_PPC_FALLBACK_NONE) s->shadow.u1 = out; /* MFAC learns from the input applied */
         break;
     }
     case PMA_CTRL_MODE_MFAC: {
@@ -120,7 +120,7 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
         o->internal2 = s->c.pid.d;
         break;
     case PMA_CTRL_MODE_OPEN_LOOP:
-        out = isfinite(openloop_u) ? clampf(openloop_u, s->u_min, s->u_max) : openloop_u;
+        out = pma_isfinite_f32(openloop_u) ? clampf(openloop_u, s->u_min, s->u_max) : openloop_u;
         break;
     default:
         out = 0.0f;

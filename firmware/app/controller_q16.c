@@ -7,6 +7,7 @@
  * converted only when read (pma_ctrl_out). Same logic as controller_f32.c, in
  * saturating Q16.16 arithmetic (pma/fixed.h). See controller.h. */
 #include "controller.h"
+#include "pma/finite.h"
 
 #if PMA_CTRL_Q16
 
@@ -22,7 +23,7 @@
 /* v in Q16.16, PMA_ERR_FIXED_RANGE when it does not fit (strictly inside +-32767) */
 static int to_q16(float v, pma_q16_t *q)
 {
-    if (!isfinite(v)) return PMA_ERR_NOT_FINITE;
+    if (!pma_isfinite_f32(v)) return PMA_ERR_NOT_FINITE;
     if (!(fabsf(v) < 32767.0f)) return PMA_ERR_FIXED_RANGE;
     *q = pma_q16_from_f32(v);
     return PMA_OK;
@@ -100,7 +101,7 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
 {
     if (s == NULL || u == NULL) return PMA_ERR_NULL;
     *u = 0.0f;
-    if (!isfinite(t_s) || !isfinite(x_cm)) return PMA_ERR_NOT_FINITE;
+    if (!pma_isfinite_f32(t_s) || !pma_isfinite_f32(x_cm)) return PMA_ERR_NOT_FINITE;
     /* Q16.16 time ends at 32767 s (9.1 h): past it the step refuses, and the supervisor
      * faults CONTROLLER (the output goes safe), rather than the reference freezing */
     if (!(t_s < 32767.0f)) return PMA_ERR_FIXED_RANGE;
@@ -120,8 +121,6 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
     uint8_t barrier = 0;
     switch (s->mode) {
     case PMA_CTRL_MODE_PPC: {
-        pma_q16_t u_mfac = 0;
-        if (s->fallback_mode != PMA_PPC_FALLBACK_NONE) CHECK(pma_mfac_step_q16(&s->shadow, x, next_reference(s, t), &u_mfac));
         if (!s->fallback_active) {
             /* the options (controller.h) choose the law's inputs */
             const pma_q16_t x_law = s->ppc_obs_pos ? q32_to_q16(s->vel.xh_q32) : x;
@@ -143,14 +142,16 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
             barrier = (uint8_t)((flags & (PMA_PPC_FLAG_BARRIER1 | PMA_PPC_FLAG_BARRIER2)) != 0);
         }
         pma_ctrl_monitor(s, t_s, t >= s->q_t_u_s && q16_abs(o->e_cm) >= s->q_w1_cm, flags);
+        /* as controller_f32.c: the fallback's law once in charge, before that its estimator */
         if (s->fallback_active) {
-            out = u_mfac;
+            CHECK(pma_mfac_step_q16(&s->shadow, x, next_reference(s, t), &out));
             flags = s->shadow.flags | PMA_CTRL_FLAG_FALLBACK;
             o->internal1 = s->shadow.phi;   /* TELEM_D as in mode MFAC */
             o->internal2 = s->shadow.u1;
+        } else if (s->fallback_mode != PMA_PPC_FALLBACK_NONE) {
+            CHECK(pma_mfac_learn_q16(&s->shadow, x, out));
         }
         if (s->lost) flags |= PMA_CTRL_FLAG_GUARANTEE_LOST;
-        if (s->fallback_mode != PMA_PPC_FALLBACK_NONE) s->shadow.u1 = out; /* MFAC learns from the input applied */
         break;
     }
     case PMA_CTRL_MODE_MFAC:
@@ -168,7 +169,7 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
         break;
     case PMA_CTRL_MODE_OPEN_LOOP: {
         /* ctrl.openloop_u is live and float: clamped in float, as the float build does */
-        const float ol = isfinite(openloop_u)
+        const float ol = pma_isfinite_f32(openloop_u)
                              ? (openloop_u < s->u_min ? s->u_min : (openloop_u > s->u_max ? s->u_max : openloop_u))
                              : openloop_u;
         o->u = pma_q16_from_f32(ol);

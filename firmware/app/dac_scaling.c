@@ -2,6 +2,7 @@
 /* Pressure command scaling: kPa -> counts, saturating (see scaling.h). */
 #include "scaling.h"
 #include "pma/status.h"
+#include "pma/finite.h"
 
 #include <math.h>
 #include <stddef.h>
@@ -9,7 +10,7 @@
 int pma_dac_validate_scaling(const pma_dac_scaling_t *s)
 {
     if (s == NULL) return PMA_ERR_NULL;
-    if (!isfinite(s->counts_at_zero_kpa) || !isfinite(s->counts_per_kpa)) {
+    if (!pma_isfinite_f32(s->counts_at_zero_kpa) || !pma_isfinite_f32(s->counts_per_kpa)) {
         return PMA_ERR_NOT_FINITE;
     }
     if (s->counts_per_kpa == 0.0f) return PMA_ERR_RANGE;
@@ -22,7 +23,7 @@ int pma_dac_kpa_to_counts(const pma_dac_scaling_t *s, float p_kpa, uint16_t *cou
     if (counts == NULL) return PMA_ERR_NULL;
     const int rc = pma_dac_validate_scaling(s);
     if (rc != PMA_OK) return rc;
-    if (!isfinite(p_kpa)) return PMA_ERR_NOT_FINITE;
+    if (!pma_isfinite_f32(p_kpa)) return PMA_ERR_NOT_FINITE;
     const float v = s->counts_at_zero_kpa + s->counts_per_kpa * p_kpa;
     /* saturate before converting (also catches v = +-inf from a huge finite p) */
     if (!(v > (float)s->min_counts)) {

@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* Parameter access by id: see params.h. */
 #include "params.h"
+#include "pma/finite.h"
 
 #include <math.h>
 #include <string.h>
@@ -55,7 +56,7 @@ static int check_range(const pma_param_desc_t *d, pma_param_value_t v)
 {
     switch (d->type) {
     case PMA_PARAM_F32:
-        if (!isfinite(v.f32)) return PMA_ERR_NOT_FINITE;
+        if (!pma_isfinite_f32(v.f32)) return PMA_ERR_NOT_FINITE;
         return (v.f32 >= d->min.f32 && v.f32 <= d->max.f32) ? PMA_OK : PMA_ERR_RANGE;
     case PMA_PARAM_U32:
         return (v.u32 >= d->min.u32 && v.u32 <= d->max.u32) ? PMA_OK : PMA_ERR_RANGE;

@@ -6,6 +6,7 @@
 #include <stddef.h>
 
 #include "pma/status.h"
+#include "pma/finite.h"
 
 pma_fault_t pma_supervisor_check(const pma_supervisor_limits_t *lim,
                                  const pma_supervisor_input_t *in)
@@ -33,7 +34,7 @@ pma_fault_t pma_supervisor_check(const pma_supervisor_limits_t *lim,
         return PMA_FAULT_HOST_HEARTBEAT_LOST;
     }
     if (in->controller_error) return PMA_FAULT_CONTROLLER;
-    if (!isfinite(in->u)) return PMA_FAULT_NOT_FINITE;
+    if (!pma_isfinite_f32(in->u)) return PMA_FAULT_NOT_FINITE;
     if (lim->barrier_ticks != 0 && in->barrier_run >= lim->barrier_ticks) return PMA_FAULT_BARRIER;
     return PMA_FAULT_NONE;
 }

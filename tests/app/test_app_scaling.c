@@ -6,6 +6,7 @@
 
 #include "pma/status.h"
 #include "pma_test.h"
+#include "output_q16.h"
 #include "scaling.h"
 
 /* The header's example: 4-20 mA over 165 ohm into a 12-bit 3.3 V ADC, 0-10 cm. */
@@ -160,6 +161,94 @@ static void test_dac_validation(void)
     assert_status(pma_dac_validate_scaling(&s), PMA_ERR_RANGE);
 }
 
+/* A small deterministic generator for the comparisons below (xorshift32). */
+static uint32_t rng_state = 2463534242u;
+static double uniform(double lo, double hi)
+{
+    rng_state ^= rng_state << 13;
+    rng_state ^= rng_state >> 17;
+    rng_state ^= rng_state << 5;
+    return lo + (hi - lo) * (double)rng_state / 4294967296.0;
+}
+
+/* The fixed-point output stage against the float functions that define it, on random
+ * configurations within the parameters' ranges and random inputs (saturating, clamped,
+ * slew-limited and free): the pressure within 6 LSB (1e-4 kPa: float's own rounding at
+ * 1000 kPa is 6e-5) plus u's rounding to Q16.16 times act.kpa_per_u (the slot's u is a
+ * Q16.16 value to begin with), and the DAC code equal, except by 1 where the float code's value lies
+ * within 1e-3 counts of a rounding boundary. */
+static void test_output_q16_matches_float(void)
+{
+    unsigned near_ties = 0, slewed = 0, clamped = 0, saturated = 0;
+    for (int n = 0; n < 20000; ++n) {
+        const float p_max = (float)uniform(50.0, 1000.0);
+        const float p_min = (float)uniform(0.0, 0.5 * p_max);
+        pma_actuator_config_t ac = {
+            .p0_kpa = (float)uniform(p_min, p_max), .kpa_per_u = (float)exp(uniform(log(1e-3), log(1e3))),
+            .polarity = (n & 1) ? 1 : -1, .p_min_kpa = p_min, .p_max_kpa = p_max,
+            .slew_kpa_s = (n % 3 == 0) ? 0.0f : (float)exp(uniform(log(10.0), log(1e6))),
+            .safe_mode = PMA_SAFE_VENT, .safe_kpa = 0.0f};
+        const uint16_t lo = (uint16_t)uniform(0, 1000), hi = (uint16_t)(lo + uniform(1, 3095));
+        pma_dac_scaling_t ds = {.counts_at_zero_kpa = (float)uniform(-2000.0, 2000.0),
+                                .counts_per_kpa = (float)((n & 2 ? 1 : -1) * exp(uniform(log(0.05), log(100.0)))),
+                                .min_counts = lo, .max_counts = hi};
+        const float period_s = (n & 4) ? 1e-3f : 2.5e-4f;
+        pma_output_q16_t q;
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_output_q16_build(&q, &ac, &ds, period_s));
+        const float u = (float)uniform(-1.2 * p_max / ac.kpa_per_u, 1.2 * p_max / ac.kpa_per_u);
+        if (!pma_output_q16_takes(u)) continue;
+        const float p_prev = (float)uniform(p_min, p_max);
+        const float pf = pma_actuator_active_kpa(&ac, u, p_prev, period_s);
+        const pma_q16_t pq = pma_output_q16_kpa(&q, pma_q16_from_f32(u), pma_q16_from_f32(p_prev));
+        /* and u's own rounding to Q16.16 (half an LSB), times the factor */
+        TEST_ASSERT_FLOAT_WITHIN(1e-4f + ac.kpa_per_u * 7.7e-6f, pf, pma_q16_to_f32(pq));
+        const float free = ac.p0_kpa + (float)ac.polarity * ac.kpa_per_u * u;
+        if (pf != free) (free < p_min || free > p_max) ? ++clamped : ++slewed;
+        uint16_t cf = 0;
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_dac_kpa_to_counts(&ds, pf, &cf));
+        const uint16_t cq = pma_output_q16_counts(&q, pma_q16_from_f32(pf));
+        const double v = (double)ds.counts_at_zero_kpa + (double)ds.counts_per_kpa * pf;
+        if (v <= lo || v >= hi) ++saturated;
+        if (fabs(v - floor(v) - 0.5) < 1e-3) {
+            ++near_ties;
+            TEST_ASSERT_UINT_WITHIN(1u, cf, cq);
+        } else {
+            TEST_ASSERT_EQUAL_UINT16(cf, cq);
+        }
+    }
+    /* every branch ran many times */
+    TEST_ASSERT_TRUE(slewed > 1000 && clamped > 1000 && saturated > 1000);
+    (void)near_ties;
+}
+
+/* What the stage cannot represent is refused (the application then runs the float
+ * functions), and an invalid configuration keeps its validation code. */
+static void test_output_q16_refuses(void)
+{
+    pma_actuator_config_t ac = {.p0_kpa = 100.0f, .kpa_per_u = 1.0f, .polarity = 1, .p_min_kpa = 0.0f,
+                                .p_max_kpa = 900.0f, .slew_kpa_s = 0.0f, .safe_mode = PMA_SAFE_VENT,
+                                .safe_kpa = 0.0f};
+    const pma_dac_scaling_t ds = {.counts_at_zero_kpa = 0.0f, .counts_per_kpa = 4.55f, .min_counts = 0,
+                                  .max_counts = 4095};
+    pma_output_q16_t q;
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_output_q16_build(&q, &ac, &ds, 1e-3f));
+    ac.slew_kpa_s = 0.005f;      /* 5e-6 kPa per tick: below half an LSB */
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_FIXED_RANGE, pma_output_q16_build(&q, &ac, &ds, 1e-3f));
+    ac.slew_kpa_s = 0.0f;
+    ac.kpa_per_u = 1e-12f;       /* beyond the shift's range */
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_FIXED_RANGE, pma_output_q16_build(&q, &ac, &ds, 1e-3f));
+    ac.kpa_per_u = NAN;
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_NOT_FINITE, pma_output_q16_build(&q, &ac, &ds, 1e-3f));
+    ac.kpa_per_u = 1.0f;
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_RANGE, pma_output_q16_build(&q, &ac, &ds, 0.0f));
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_NULL, pma_output_q16_build(NULL, &ac, &ds, 1e-3f));
+    TEST_ASSERT_FALSE(pma_output_q16_takes(NAN));
+    TEST_ASSERT_FALSE(pma_output_q16_takes(INFINITY));
+    TEST_ASSERT_FALSE(pma_output_q16_takes(32768.0f));
+    TEST_ASSERT_TRUE(pma_output_q16_takes(-32767.0f));
+    TEST_ASSERT_TRUE(pma_output_q16_takes(0.0f));
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -169,5 +258,7 @@ int main(void)
     RUN_TEST(test_adc_inverse);
     RUN_TEST(test_dac_scaling_and_saturation);
     RUN_TEST(test_dac_validation);
+    RUN_TEST(test_output_q16_matches_float);
+    RUN_TEST(test_output_q16_refuses);
     return UNITY_END();
 }

@@ -156,6 +156,50 @@ static void test_closed_loop_fixed_matches_float(void)
     TEST_ASSERT_LESS_THAN_DOUBLE(0.05, worst_e);
 }
 
+/* learn = a step whose u(k) is then replaced by the input another controller applied:
+ * the same phi, history and reset count in both arithmetics, over a run whose applied
+ * input is not MFAC's own (a sine beside a slow ramp), with resets and without */
+static void test_learn_is_a_step_with_the_applied_input(void)
+{
+    pma_mfac_config_t c = paper();
+    pma_mfac_f32_t a, b;
+    pma_mfac_q16_t qa, qb;
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_init_f32(&a, &c));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_init_f32(&b, &c));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_init_q16(&qa, &c));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_init_q16(&qb, &c));
+    double y = -2.0;
+    for (int k = 0; k < 2000; ++k) {
+        /* the applied input: held for 10 steps at a time, so du = 0 (a reset) in between */
+        const double u_app = (k / 10) % 7 == 0 ? 0.0 : 40.0 * sin(0.013 * (k / 10) * 10) + 0.01 * k;
+        float u;
+        pma_q16_t uq;
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_step_f32(&a, (float)y, (float)(y + 0.01), &u));
+        a.u1 = (float)u_app;
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_learn_f32(&b, (float)y, (float)u_app));
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_step_q16(&qa, Q16(y), Q16(y + 0.01), &uq));
+        qa.u1 = Q16(u_app);
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_learn_q16(&qb, Q16(y), Q16(u_app)));
+        TEST_ASSERT_EQUAL_FLOAT(a.phi, b.phi);
+        TEST_ASSERT_EQUAL_FLOAT(a.u2, b.u2);
+        TEST_ASSERT_EQUAL_FLOAT(a.y1, b.y1);
+        TEST_ASSERT_EQUAL_INT32(qa.phi, qb.phi);
+        TEST_ASSERT_EQUAL_INT32(qa.u1, qb.u1);
+        TEST_ASSERT_EQUAL_INT32(qa.u2, qb.u2);
+        TEST_ASSERT_EQUAL_UINT32(a.flags & PMA_MFAC_FLAG_RESET, b.flags);
+        TEST_ASSERT_EQUAL_UINT32(qa.flags & PMA_MFAC_FLAG_RESET, qb.flags);
+        y = 0.95 * y + 0.002 * u_app - 0.1;   /* a first-order plant driven by u_app */
+    }
+    TEST_ASSERT_EQUAL_UINT32(a.resets, b.resets);
+    TEST_ASSERT_EQUAL_UINT32(qa.resets, qb.resets);
+    TEST_ASSERT_TRUE(b.resets > 0 && b.resets < b.k);      /* both branches ran */
+    TEST_ASSERT_TRUE(qb.resets > 0 && qb.resets < qb.k);
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_NOT_FINITE, pma_mfac_learn_f32(&b, NAN, 0.0f));
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_NOT_FINITE, pma_mfac_learn_f32(&b, 0.0f, INFINITY));
+    TEST_ASSERT_EQUAL_UINT32(2000u, b.k);                  /* refused: state unchanged */
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_NULL, pma_mfac_learn_q16(NULL, 0, 0));
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -164,5 +208,6 @@ int main(void)
     RUN_TEST(test_limits);
     RUN_TEST(test_invalid_config);
     RUN_TEST(test_closed_loop_fixed_matches_float);
+    RUN_TEST(test_learn_is_a_step_with_the_applied_input);
     return UNITY_END();
 }

@@ -55,22 +55,43 @@ void pma_mfac_reset_f32(pma_mfac_f32_t *s)
     s->flags = 0;
 }
 
+/* phi(k) from y(k) and the inputs applied at k-1 and k-2 (eq. of pma/mfac.h, with its reset
+ * rule); *flags gets PMA_MFAC_FLAG_RESET when the rule put phi back to phi(1). */
+static inline float estimate(const pma_mfac_f32_t *s, float y_cm, uint32_t *flags)
+{
+    const pma_mfac_config_t *c = &s->cfg;
+    const float y1 = (s->k == 0) ? y_cm : s->y1;   /* y(-1) = y(0) */
+    const float du = s->u1 - s->u2;
+    const float dy = y_cm - y1;
+    float phi = s->phi + c->eta * du / (c->mu + du * du) * (dy - s->phi * du);
+    const int sign_flip = (c->phi1 > 0.0f) ? !(phi > 0.0f) : !(phi < 0.0f);
+    if (fabsf(phi) <= c->eps || fabsf(du) <= c->eps || sign_flip) {
+        phi = c->phi1;
+        *flags |= PMA_MFAC_FLAG_RESET;
+    }
+    return phi;
+}
+
+/* the state after step k: phi(k), the input u applied at k, y(k) */
+static inline void commit(pma_mfac_f32_t *s, float phi, float u, float y_cm, uint32_t flags)
+{
+    s->phi = phi;
+    s->u2 = s->u1;
+    s->u1 = u;
+    s->y1 = y_cm;
+    s->k++;
+    if (flags & PMA_MFAC_FLAG_RESET) s->resets++;
+    s->flags = flags;
+}
+
 int pma_mfac_step_f32(pma_mfac_f32_t *s, float y_cm, float yref_next_cm, float *u)
 {
     if (s == NULL || u == NULL) return PMA_ERR_NULL;
     if (!s->ready) return PMA_ERR_NOT_READY;
     if (!isfinite(y_cm) || !isfinite(yref_next_cm)) return PMA_ERR_NOT_FINITE;
     const pma_mfac_config_t *c = &s->cfg;
-    const float y1 = (s->k == 0) ? y_cm : s->y1;   /* y(-1) = y(0) */
-    const float du = s->u1 - s->u2;
-    const float dy = y_cm - y1;
-    float phi = s->phi + c->eta * du / (c->mu + du * du) * (dy - s->phi * du);
     uint32_t flags = 0;
-    const int sign_flip = (c->phi1 > 0.0f) ? !(phi > 0.0f) : !(phi < 0.0f);
-    if (fabsf(phi) <= c->eps || fabsf(du) <= c->eps || sign_flip) {
-        phi = c->phi1;
-        flags |= PMA_MFAC_FLAG_RESET;
-    }
+    const float phi = estimate(s, y_cm, &flags);
     float v = s->u1 + c->rho * phi / (c->lambda + phi * phi) * (yref_next_cm - y_cm);
     if (!isfinite(v)) return PMA_ERR_NOT_FINITE;   /* inputs far outside any sane range */
     if (v > c->u_max) {
@@ -80,13 +101,18 @@ int pma_mfac_step_f32(pma_mfac_f32_t *s, float y_cm, float yref_next_cm, float *
         v = c->u_min;
         flags |= PMA_MFAC_FLAG_SAT_LOW;
     }
-    s->phi = phi;
-    s->u2 = s->u1;
-    s->u1 = v;
-    s->y1 = y_cm;
-    s->k++;
-    if (flags & PMA_MFAC_FLAG_RESET) s->resets++;
-    s->flags = flags;
+    commit(s, phi, v, y_cm, flags);
     *u = v;
+    return PMA_OK;
+}
+
+int pma_mfac_learn_f32(pma_mfac_f32_t *s, float y_cm, float u_applied)
+{
+    if (s == NULL) return PMA_ERR_NULL;
+    if (!s->ready) return PMA_ERR_NOT_READY;
+    if (!isfinite(y_cm) || !isfinite(u_applied)) return PMA_ERR_NOT_FINITE;
+    uint32_t flags = 0;
+    const float phi = estimate(s, y_cm, &flags);
+    commit(s, phi, u_applied, y_cm, flags);
     return PMA_OK;
 }

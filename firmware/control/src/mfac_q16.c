@@ -69,10 +69,10 @@ void pma_mfac_reset_q16(pma_mfac_q16_t *s)
     s->flags = 0;
 }
 
-int pma_mfac_step_q16(pma_mfac_q16_t *s, pma_q16_t y_cm, pma_q16_t yref_next_cm, pma_q16_t *u)
+/* phi(k) from y(k) and the inputs applied at k-1 and k-2 (pma/mfac.h, with its reset rule);
+ * *flags gets PMA_MFAC_FLAG_RESET when the rule put phi back to phi(1). */
+static inline pma_q16_t estimate(const pma_mfac_q16_t *s, pma_q16_t y_cm, uint32_t *flags)
 {
-    if (s == NULL || u == NULL) return PMA_ERR_NULL;
-    if (!s->ready) return PMA_ERR_NOT_READY;
     const pma_q16_t y1 = (s->k == 0) ? y_cm : s->y1;
     const pma_q16_t du = pma_q16_ssub(s->u1, s->u2);
     const pma_q16_t dy = pma_q16_ssub(y_cm, y1);
@@ -85,14 +85,34 @@ int pma_mfac_step_q16(pma_mfac_q16_t *s, pma_q16_t y_cm, pma_q16_t yref_next_cm,
     const pma_q16_t innov = pma_q16_sat64(pma_rshift_round(innov_q32, 16));
     const pma_q16_t dphi = pma_q16_sat64(pma_rshift_round(pma_mul32(k1_q24, innov), 24));
     pma_q16_t phi = pma_q16_sadd(s->phi, dphi);
-    uint32_t flags = 0;
     const pma_q16_t aphi = phi < 0 ? pma_q16_sneg(phi) : phi;
     const pma_q16_t adu = du < 0 ? pma_q16_sneg(du) : du;
     const int sign_flip = (s->phi1 > 0) ? !(phi > 0) : !(phi < 0);
     if (aphi <= s->eps || adu <= s->eps || sign_flip) {
         phi = s->phi1;
-        flags |= PMA_MFAC_FLAG_RESET;
+        *flags |= PMA_MFAC_FLAG_RESET;
     }
+    return phi;
+}
+
+/* the state after step k: phi(k), the input u applied at k, y(k) */
+static inline void commit(pma_mfac_q16_t *s, pma_q16_t phi, pma_q16_t u, pma_q16_t y_cm, uint32_t flags)
+{
+    s->phi = phi;
+    s->u2 = s->u1;
+    s->u1 = u;
+    s->y1 = y_cm;
+    s->k++;
+    if (flags & PMA_MFAC_FLAG_RESET) s->resets++;
+    s->flags = flags;
+}
+
+int pma_mfac_step_q16(pma_mfac_q16_t *s, pma_q16_t y_cm, pma_q16_t yref_next_cm, pma_q16_t *u)
+{
+    if (s == NULL || u == NULL) return PMA_ERR_NULL;
+    if (!s->ready) return PMA_ERR_NOT_READY;
+    uint32_t flags = 0;
+    const pma_q16_t phi = estimate(s, y_cm, &flags);
     /* u = u(k-1) + rho phi / (lambda + phi^2) (y* - y) */
     const pma_q16_t k2 = div_q32(pma_mul32(s->rho, phi),
                                  (int64_t)s->lambda * 65536 + pma_mul32(phi, phi), 16);
@@ -105,13 +125,17 @@ int pma_mfac_step_q16(pma_mfac_q16_t *s, pma_q16_t y_cm, pma_q16_t yref_next_cm,
         out = s->u_min;
         flags |= PMA_MFAC_FLAG_SAT_LOW;
     }
-    s->phi = phi;
-    s->u2 = s->u1;
-    s->u1 = out;
-    s->y1 = y_cm;
-    s->k++;
-    if (flags & PMA_MFAC_FLAG_RESET) s->resets++;
-    s->flags = flags;
+    commit(s, phi, out, y_cm, flags);
     *u = out;
+    return PMA_OK;
+}
+
+int pma_mfac_learn_q16(pma_mfac_q16_t *s, pma_q16_t y_cm, pma_q16_t u_applied)
+{
+    if (s == NULL) return PMA_ERR_NULL;
+    if (!s->ready) return PMA_ERR_NOT_READY;
+    uint32_t flags = 0;
+    const pma_q16_t phi = estimate(s, y_cm, &flags);
+    commit(s, phi, u_applied, y_cm, flags);
     return PMA_OK;
 }

@@ -54,6 +54,13 @@ void pma_mfac_reset_f32(pma_mfac_f32_t *s);
 /* y_cm: y(k); yref_next_cm: y*(k+1). Writes u(k). Non-finite input:
  * PMA_ERR_NOT_FINITE, state unchanged. */
 int pma_mfac_step_f32(pma_mfac_f32_t *s, float y_cm, float yref_next_cm, float *u);
+/* The estimator's step alone, for an MFAC that learns from the input another controller
+ * applies (the paper's controller's fallback): phi(k) from y(k) as in the step, then u_applied
+ * is recorded as u(k) in place of the law's own (PMA_MFAC_FLAG_RESET in flags as in the step,
+ * no SAT flags: no law ran). The same state as a step whose u(k) was then replaced by
+ * u_applied, without the law's quotient. Non-finite input: PMA_ERR_NOT_FINITE, state
+ * unchanged. */
+int pma_mfac_learn_f32(pma_mfac_f32_t *s, float y_cm, float u_applied);
 
 /* Fixed point: y, u, phi in Q16.16; products and quotients in 64-bit
  * intermediates so du^2 (up to 2^30) never saturates mid-computation. */
@@ -67,5 +74,6 @@ typedef struct pma_mfac_q16 {
 int pma_mfac_init_q16(pma_mfac_q16_t *s, const pma_mfac_config_t *cfg);
 void pma_mfac_reset_q16(pma_mfac_q16_t *s);
 int pma_mfac_step_q16(pma_mfac_q16_t *s, pma_q16_t y_cm, pma_q16_t yref_next_cm, pma_q16_t *u);
+int pma_mfac_learn_q16(pma_mfac_q16_t *s, pma_q16_t y_cm, pma_q16_t u_applied);   /* as _f32 */
 
 #endif /* PMA_MFAC_H */

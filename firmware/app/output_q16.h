@@ -1,0 +1,69 @@
+/* SPDX-License-Identifier: Apache-2.0 */
+/* The active output stage in fixed point: the actuator's law and the DAC
+ * scaling of a tick (pma_actuator_active_kpa, then pma_dac_kpa_to_counts) in
+ * integer arithmetic, for the Q16.16 builds (PMA_CTRL_Q16: cores without an
+ * FPU, where those two float functions cost about 1,300 instructions a tick
+ * in software float). The float functions stay the definition: this stage is
+ * built from the same configurations and tested against them
+ * (tests/app/test_output_q16.c).
+ *
+ * Formats:
+ *   u       Q16.16 in the controller's unit (the slot's range, |u| < 32768);
+ *   p       Q16.16 kPa (the actuator's range is 0..1000 kPa: rounding 2^-17 kPa);
+ *   counts  the DAC code, computed in Q16.16 counts in 64 bits, then rounded
+ *           half up and saturated to [min_counts, max_counts] as the float
+ *           function does.
+ * The factors act.polarity * act.kpa_per_u (1e-6..1e4 kPa per unit) and
+ * dac.counts_per_kpa (|.| <= 1000) are a 30-bit mantissa and a shift (relative
+ * rounding below 2^-29). Every sum saturates; a pressure beyond Q16.16 before
+ * the actuator's limits is saturated, and the limits then apply as in float.
+ *
+ * pma_output_q16_build() refuses (PMA_ERR_FIXED_RANGE) what this stage cannot
+ * represent: a slew step per tick below half an LSB (slower than 2^-17 kPa per
+ * tick) or any value outside Q16.16; the application then keeps the float
+ * functions for that configuration. It returns the configurations'
+ * validation codes as they are. */
+#ifndef PMA_OUTPUT_Q16_H
+#define PMA_OUTPUT_Q16_H
+
+#include <stdint.h>
+#include <string.h>
+
+#include "actuator.h"
+#include "pma/fixed.h"
+#include "scaling.h"
+
+typedef struct pma_scale_q {   /* x m 2^-s */
+    int32_t m;                 /* |m| < 2^30 */
+    uint8_t s;                 /* 1..62 */
+} pma_scale_q_t;
+
+typedef struct pma_output_q16 {
+    pma_q16_t p0, p_min, p_max;   /* kPa */
+    pma_q16_t step;               /* slew limit per tick [kPa]; 0: none */
+    pma_scale_q_t k;              /* u -> p - p0: polarity * kpa_per_u */
+    int64_t c0;                   /* counts at 0 kPa, Q16.16 */
+    pma_scale_q_t cpk;            /* p -> counts - c0: counts_per_kpa */
+    uint16_t min_counts, max_counts;
+} pma_output_q16_t;
+
+int pma_output_q16_build(pma_output_q16_t *o, const pma_actuator_config_t *ac,
+                         const pma_dac_scaling_t *ds, float period_s);
+
+/* Whether v is a value this stage takes as u or p: finite, |v| < 2^15 (from
+ * its bits: no float operation). */
+static inline int pma_output_q16_takes(float v)
+{
+    uint32_t b;
+    memcpy(&b, &v, sizeof b);
+    return ((b >> 23) & 0xFFu) < 127u + 15u;
+}
+
+/* pma_actuator_active_kpa for finite u and p_prev: p0 + k u, limited to
+ * [p_min, p_max], then to p_prev +- step. */
+pma_q16_t pma_output_q16_kpa(const pma_output_q16_t *o, pma_q16_t u, pma_q16_t p_prev_kpa);
+
+/* pma_dac_kpa_to_counts of p. */
+uint16_t pma_output_q16_counts(const pma_output_q16_t *o, pma_q16_t p_kpa);
+
+#endif /* PMA_OUTPUT_Q16_H */
