@@ -35,6 +35,12 @@ static pma_q16_t q32_to_q16(int64_t a)
     return pma_q16_sat64(pma_rshift_round(a, 16));
 }
 
+/* MFAC's phi (Q8.24) as the telemetry's Q16.16 signal */
+static pma_q16_t phi_q16(int32_t phi_q24)
+{
+    return (pma_q16_t)pma_rshift_round(phi_q24, 8);
+}
+
 static pma_q16_t q16_abs(pma_q16_t a)
 {
     return a < 0 ? pma_q16_sneg(a) : a;
@@ -146,7 +152,7 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
         if (s->fallback_active) {
             CHECK(pma_mfac_step_q16(&s->shadow, x, next_reference(s, t), &out));
             flags = s->shadow.flags | PMA_CTRL_FLAG_FALLBACK;
-            o->internal1 = s->shadow.phi;   /* TELEM_D as in mode MFAC */
+            o->internal1 = phi_q16(s->shadow.phi_q24);   /* TELEM_D as in mode MFAC */
             o->internal2 = s->shadow.u1;
         } else if (s->fallback_mode != PMA_PPC_FALLBACK_NONE) {
             CHECK(pma_mfac_learn_q16(&s->shadow, x, out));
@@ -158,7 +164,7 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
         /* MFAC's law uses the reference of the next sample, y*(k+1) */
         CHECK(pma_mfac_step_q16(&s->c.mfac, x, next_reference(s, t), &out));
         flags = s->c.mfac.flags;
-        o->internal1 = s->c.mfac.phi;
+        o->internal1 = phi_q16(s->c.mfac.phi_q24);
         o->internal2 = s->c.mfac.u1;
         break;
     case PMA_CTRL_MODE_PID:

@@ -11,7 +11,7 @@
 /* 1,160 bytes with the PPC's fallback MFAC beside the law and its funnel widening
  * (controller.h); the Q16.16 slot adds its fixed-point copies of the signals and limits
  * and the fixed-point output stage with the parameters it was built from (output_q16.h:
- * 1,328 bytes) */
+ * 1,344 bytes) */
 #if PMA_CTRL_Q16
 _Static_assert(sizeof(pma_app_t) <= 1352u, "pma_app_t must stay small (Cortex-M0: 16 KB RAM)");
 #else

@@ -139,7 +139,7 @@ static void run(const golden_mfac_set_t *set, golden_variant_t variant)
             pma_q16_t uq = 0;
             rc = pma_mfac_step_q16(&sq, pma_q16_from_f32(r->y_cm),
                                    pma_q16_from_f32(r->yref_next_cm), &uq);
-            phi = pma_q16_to_f32(sq.phi);
+            phi = (float)sq.phi_q24 / 16777216.0f;   /* Q8.24 */
             u = pma_q16_to_f32(uq);
             flags = sq.flags;
         } else {

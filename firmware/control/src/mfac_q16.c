@@ -1,13 +1,17 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* CFDL-MFAC, fixed-point variant (see pma/mfac.h). Signals and parameters in
- * Q16.16; the squares and quotients of the update laws use 64-bit
- * intermediates (Q32) so that du^2 and phi^2 never saturate mid-computation;
- * the estimator gain eta du / (mu + du^2) is kept in Q8.24; results saturate
- * to Q16.16. eps below 2^-16 acts as one LSB (2^-16). */
+ * Q16.16, the pseudo partial derivative phi in Q8.24; the squares and quotients
+ * of the update laws use 64-bit intermediates (Q32) so that du^2 and phi^2 never
+ * saturate mid-computation; the estimator gain eta du / (mu + du^2) and the
+ * innovation dy - phi du are kept in Q8.24 (the innovation in Q16.16 where it
+ * is 128 cm or more); results saturate (phi to +-128, u to Q16.16). eps below
+ * 2^-16 acts as one LSB (2^-16) for du, and as one LSB of Q8.24 (2^-24) for phi
+ * where it is below that. */
 #include "pma/mfac.h"
 #include "pma/status.h"
 
 #include <stddef.h>
+#include <stdint.h>
 #include "check.h"
 #include "fixed_internal.h"
 
@@ -34,7 +38,7 @@ int pma_mfac_init_q16(pma_mfac_q16_t *s, const pma_mfac_config_t *cfg)
     if (s == NULL) return PMA_ERR_NULL;
     s->ready = 0;
     PMA_CHECK(pma_mfac_validate_config(cfg));
-    const float vals[] = {cfg->rho, cfg->phi1, cfg->u_min, cfg->u_max, cfg->u_init};
+    const float vals[] = {cfg->rho, cfg->u_min, cfg->u_max, cfg->u_init};
     for (unsigned i = 0; i < sizeof vals / sizeof vals[0]; ++i) {
         PMA_CHECK(pma_check_q16_range(vals[i]));
     }
@@ -47,8 +51,11 @@ int pma_mfac_init_q16(pma_mfac_q16_t *s, const pma_mfac_config_t *cfg)
     s->lambda = pma_to_q(cfg->lambda, 16);
     s->eps = pma_to_q(cfg->eps, 16);
     if (s->eps == 0 && cfg->eps > 0.0f) s->eps = 1;
-    s->phi1 = pma_to_q(cfg->phi1, 16);
-    if ((s->phi1 < 0 ? -s->phi1 : s->phi1) <= s->eps) return PMA_ERR_FIXED_RANGE;
+    if (!(cfg->phi1 > -127.0f && cfg->phi1 < 127.0f)) return PMA_ERR_FIXED_RANGE;   /* Q8.24 */
+    s->phi1_q24 = pma_to_q(cfg->phi1, 24);
+    s->eps_q24 = cfg->eps < 127.0f ? pma_to_q(cfg->eps, 24) : INT32_MAX;
+    if (s->eps_q24 == 0 && cfg->eps > 0.0f) s->eps_q24 = 1;
+    if ((s->phi1_q24 < 0 ? -s->phi1_q24 : s->phi1_q24) <= s->eps_q24) return PMA_ERR_FIXED_RANGE;
     s->u_min = pma_to_q(cfg->u_min, 16);
     s->u_max = pma_to_q(cfg->u_max, 16);
     s->u_init = pma_to_q(cfg->u_init, 16);
@@ -60,7 +67,7 @@ int pma_mfac_init_q16(pma_mfac_q16_t *s, const pma_mfac_config_t *cfg)
 void pma_mfac_reset_q16(pma_mfac_q16_t *s)
 {
     if (s == NULL) return;
-    s->phi = s->phi1;
+    s->phi_q24 = s->phi1_q24;
     s->u1 = s->u_init;
     s->u2 = s->u_init;
     s->y1 = 0;
@@ -69,9 +76,9 @@ void pma_mfac_reset_q16(pma_mfac_q16_t *s)
     s->flags = 0;
 }
 
-/* phi(k) from y(k) and the inputs applied at k-1 and k-2 (pma/mfac.h, with its reset rule);
- * *flags gets PMA_MFAC_FLAG_RESET when the rule put phi back to phi(1). */
-static inline pma_q16_t estimate(const pma_mfac_q16_t *s, pma_q16_t y_cm, uint32_t *flags)
+/* phi(k) in Q8.24 from y(k) and the inputs applied at k-1 and k-2 (pma/mfac.h, with its
+ * reset rule); *flags gets PMA_MFAC_FLAG_RESET when the rule put phi back to phi(1). */
+static inline int32_t estimate(const pma_mfac_q16_t *s, pma_q16_t y_cm, uint32_t *flags)
 {
     const pma_q16_t y1 = (s->k == 0) ? y_cm : s->y1;
     const pma_q16_t du = pma_q16_ssub(s->u1, s->u2);
@@ -81,24 +88,30 @@ static inline pma_q16_t estimate(const pma_mfac_q16_t *s, pma_q16_t y_cm, uint32
      * keeps it precise, since it multiplies innovations of tens of cm */
     const int64_t du2_q32 = pma_mul32(du, du);
     const int32_t k1_q24 = div_q32(pma_mul32(s->eta, du), (int64_t)s->mu * 65536 + du2_q32, 24);
-    const int64_t innov_q32 = (int64_t)dy * 65536 - pma_mul32(s->phi, du);
-    const pma_q16_t innov = pma_q16_sat64(pma_rshift_round(innov_q32, 16));
-    const pma_q16_t dphi = pma_q16_sat64(pma_rshift_round(pma_mul32(k1_q24, innov), 24));
-    pma_q16_t phi = pma_q16_sadd(s->phi, dphi);
-    const pma_q16_t aphi = phi < 0 ? pma_q16_sneg(phi) : phi;
+    /* dy - phi du in Q8.24 (phi du is Q24 x Q16 = Q40), or in Q16.16 from 128 cm on */
+    const int64_t innov_q24 = (int64_t)dy * 256 - pma_rshift_round(pma_mul32(s->phi_q24, du), 16);
+    int64_t dphi_q24;
+    if (innov_q24 >= INT32_MIN && innov_q24 <= INT32_MAX) {
+        dphi_q24 = pma_rshift_round(pma_mul32(k1_q24, (int32_t)innov_q24), 24);
+    } else {
+        const pma_q16_t innov = pma_q16_sat64(pma_rshift_round(innov_q24, 8));
+        dphi_q24 = pma_rshift_round(pma_mul32(k1_q24, innov), 16);
+    }
+    int32_t phi = pma_q16_sat64((int64_t)s->phi_q24 + dphi_q24);   /* Q8.24, saturated */
+    const int32_t aphi = phi < 0 ? (phi == INT32_MIN ? INT32_MAX : -phi) : phi;
     const pma_q16_t adu = du < 0 ? pma_q16_sneg(du) : du;
-    const int sign_flip = (s->phi1 > 0) ? !(phi > 0) : !(phi < 0);
-    if (aphi <= s->eps || adu <= s->eps || sign_flip) {
-        phi = s->phi1;
+    const int sign_flip = (s->phi1_q24 > 0) ? !(phi > 0) : !(phi < 0);
+    if (aphi <= s->eps_q24 || adu <= s->eps || sign_flip) {
+        phi = s->phi1_q24;
         *flags |= PMA_MFAC_FLAG_RESET;
     }
     return phi;
 }
 
 /* the state after step k: phi(k), the input u applied at k, y(k) */
-static inline void commit(pma_mfac_q16_t *s, pma_q16_t phi, pma_q16_t u, pma_q16_t y_cm, uint32_t flags)
+static inline void commit(pma_mfac_q16_t *s, int32_t phi_q24, pma_q16_t u, pma_q16_t y_cm, uint32_t flags)
 {
-    s->phi = phi;
+    s->phi_q24 = phi_q24;
     s->u2 = s->u1;
     s->u1 = u;
     s->y1 = y_cm;
@@ -112,10 +125,10 @@ int pma_mfac_step_q16(pma_mfac_q16_t *s, pma_q16_t y_cm, pma_q16_t yref_next_cm,
     if (s == NULL || u == NULL) return PMA_ERR_NULL;
     if (!s->ready) return PMA_ERR_NOT_READY;
     uint32_t flags = 0;
-    const pma_q16_t phi = estimate(s, y_cm, &flags);
-    /* u = u(k-1) + rho phi / (lambda + phi^2) (y* - y) */
-    const pma_q16_t k2 = div_q32(pma_mul32(s->rho, phi),
-                                 (int64_t)s->lambda * 65536 + pma_mul32(phi, phi), 16);
+    const int32_t phi = estimate(s, y_cm, &flags);
+    /* u = u(k-1) + rho phi / (lambda + phi^2) (y* - y): numerator and denominator in Q32 */
+    const pma_q16_t k2 = div_q32(pma_rshift_round(pma_mul32(s->rho, phi), 8),
+                                 (int64_t)s->lambda * 65536 + pma_rshift_round(pma_mul32(phi, phi), 16), 16);
     const pma_q16_t v = pma_q16_sadd(s->u1, pma_q16_smul(k2, pma_q16_ssub(yref_next_cm, y_cm)));
     pma_q16_t out = v;
     if (v > s->u_max) {
@@ -135,7 +148,7 @@ int pma_mfac_learn_q16(pma_mfac_q16_t *s, pma_q16_t y_cm, pma_q16_t u_applied)
     if (s == NULL) return PMA_ERR_NULL;
     if (!s->ready) return PMA_ERR_NOT_READY;
     uint32_t flags = 0;
-    const pma_q16_t phi = estimate(s, y_cm, &flags);
+    const int32_t phi = estimate(s, y_cm, &flags);
     commit(s, phi, u_applied, y_cm, flags);
     return PMA_OK;
 }

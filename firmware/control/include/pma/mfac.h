@@ -62,11 +62,15 @@ int pma_mfac_step_f32(pma_mfac_f32_t *s, float y_cm, float yref_next_cm, float *
  * unchanged. */
 int pma_mfac_learn_f32(pma_mfac_f32_t *s, float y_cm, float u_applied);
 
-/* Fixed point: y, u, phi in Q16.16; products and quotients in 64-bit
+/* Fixed point: y and u in Q16.16; phi in Q8.24 (|phi| < 128: a pseudo partial derivative
+ * in cm per input unit is small, 0.01 cm/kPa on a muscle, and Q16.16 would hold it to 3 or 4
+ * significant digits and lose its small updates); products and quotients in 64-bit
  * intermediates so du^2 (up to 2^30) never saturates mid-computation. */
 typedef struct pma_mfac_q16 {
-    pma_q16_t eta, mu, rho, lambda, eps, phi1, u_min, u_max, u_init;
-    pma_q16_t phi, u1, u2, y1;
+    pma_q16_t eta, mu, rho, lambda, eps, u_min, u_max, u_init;
+    int32_t eps_q24, phi1_q24;   /* eps and phi(1) in Q8.24 */
+    int32_t phi_q24;             /* phi(k-1), Q8.24 */
+    pma_q16_t u1, u2, y1;
     uint32_t k, resets, flags;
     uint8_t ready;
 } pma_mfac_q16_t;
