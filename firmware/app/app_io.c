@@ -73,12 +73,14 @@ static const pma_output_q16_t *output_q16(pma_app_t *app)
     const float f[] = {p->act_p0_kpa, p->act_kpa_per_u, p->act_p_min_kpa, p->act_p_max_kpa,
                        p->act_slew_kpa_s, p->safety_safe_kpa, p->dac_counts_at_zero_kpa,
                        p->dac_counts_per_kpa, app->timing.period_s};
+    enum { NF = sizeof f / sizeof f[0] };   /* then four integer parameters */
+    _Static_assert(NF + 4u == PMA_APP_OUTPUT_KEY_WORDS, "the key holds exactly the values the stage is built from");
     uint32_t key[PMA_APP_OUTPUT_KEY_WORDS];
     memcpy(key, f, sizeof f);
-    key[9] = (uint32_t)p->act_polarity;
-    key[10] = p->safety_safe_mode;
-    key[11] = p->dac_min_counts;
-    key[12] = p->dac_max_counts;
+    key[NF] = (uint32_t)p->act_polarity;
+    key[NF + 1] = p->safety_safe_mode;
+    key[NF + 2] = p->dac_min_counts;
+    key[NF + 3] = p->dac_max_counts;
     pma_app_output_q16_t *c = &app->output.q16;
     int same = c->built;
     for (unsigned i = 0; same && i < PMA_APP_OUTPUT_KEY_WORDS; ++i) same = key[i] == c->key[i];
@@ -97,7 +99,7 @@ static const pma_output_q16_t *output_q16(pma_app_t *app)
 
 void pma_app_write_output(pma_app_t *app)
 {
-    int rc = PMA_ERR_NOT_READY;
+    int written = 0;   /* p and its DAC code set by the fixed-point stage */
 #if PMA_CTRL_Q16
     /* an active output in fixed point where the stage takes the values; the float functions,
      * which define it, otherwise (and always in float builds) */
@@ -108,13 +110,13 @@ void pma_app_write_output(pma_app_t *app)
                                                    pma_q16_from_f32(app->output.p_kpa));
             app->output.p_kpa = pma_q16_to_f32(p);
             app->output.dac_counts = pma_output_q16_counts(q, p);
-            rc = PMA_OK;
+            written = 1;
         }
     }
 #endif
     pma_actuator_config_t ac;
     pma_dac_scaling_t ds;
-    if (rc != PMA_OK) {
+    if (!written) {
         pma_app_actuator_config(&app->params, &ac);
         pma_app_dac_scaling(&app->params, &ds);
         if (pma_app_output_active(app)) {
@@ -124,8 +126,7 @@ void pma_app_write_output(pma_app_t *app)
             app->output.p_kpa = pma_actuator_safe_kpa(&ac, app->output.p_kpa);
         }
         uint16_t counts = app->output.dac_counts;
-        rc = pma_dac_kpa_to_counts(&ds, app->output.p_kpa, &counts);
-        if (rc == PMA_OK) {
+        if (pma_dac_kpa_to_counts(&ds, app->output.p_kpa, &counts) == PMA_OK) {
             app->output.dac_counts = counts;
         } else {
             /* unreachable while the scaling is enforced at SET (and p is finite):
