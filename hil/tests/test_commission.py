@@ -32,6 +32,7 @@ from pmactl.commission_rules import (
     Task,
     derive,
     fit_step,
+    law_margins,
     loop_margins,
     mfac_phi1,
 )
@@ -175,6 +176,40 @@ def test_loop_margins_of_a_known_loop():
     m = loop_margins(0.0, 10.0, 0.0, 1.0, 1e-9, 0.05)
     assert m["crossover_rad_s"] == pytest.approx(10.0, rel=0.01)
     assert m["phase_margin_deg"] == pytest.approx(90.0 - math.degrees(0.5), abs=0.5)
+
+
+def test_law_margins_are_the_pid_without_the_observer_and_less_with_it():
+    """The law's small-signal loop through the tracking observer: with an observer far faster
+    than the loop it is loop_margins' PID K_v (K_p + k_ff) + K_v s + K_v K_p k_ff / s; at 4x the
+    crossover its lag costs gain margin."""
+    f = derive(_measured(theta=0.03), TASK).figures
+    k_v, k_p, g, tau, theta = f["k_v_u_per_cm_s"], f["k_p_per_s"], f["gain_cm_per_u"], f["tau_s"], f["theta_eff_s"]
+    k_ff = rules.FF_PER_KP * k_p
+    pid = loop_margins(k_v * (k_p + k_ff), k_v * k_p * k_ff, k_v, g, tau, theta)
+    far = law_margins(k_v, k_p, k_ff, 1e5, g, tau, theta)
+    for key in ("phase_margin_deg", "gain_margin", "crossover_rad_s"):
+        assert far[key] == pytest.approx(pid[key], rel=2e-3)
+    near = law_margins(k_v, k_p, k_ff, 4.0 * pid["crossover_rad_s"] / (2.0 * math.pi), g, tau, theta)
+    assert near["gain_margin"] < 0.9 * pid["gain_margin"]
+
+
+@pytest.mark.parametrize("theta", [0.005, 0.02, 0.04, 0.065])
+def test_derive_places_the_observer_and_reports_the_loop_with_it(theta):
+    """The observer sits at FC_PER_CROSSOVER x the PID's crossover, and the report's second
+    margins line is the loop with that observer in it: less margin than the PID's, more than
+    with an observer at half that bandwidth."""
+    d = derive(_measured(theta=theta), TASK)
+    f, p = d.figures, d.params
+    fc = rules.FC_PER_CROSSOVER * d.margins["crossover_rad_s"] / (2.0 * math.pi)
+    assert p["vel.fc_hz"] == pytest.approx(min(max(fc, rules.FC_MIN_HZ), rules.FC_MAX_HZ), abs=0.006)
+    args = (f["k_v_u_per_cm_s"], f["k_p_per_s"], rules.FF_PER_KP * f["k_p_per_s"])
+    plant = (f["gain_cm_per_u"], f["tau_s"], f["theta_eff_s"])
+    again = law_margins(*args, p["vel.fc_hz"], *plant)
+    assert f["observed_gain_margin"] == pytest.approx(again["gain_margin"], rel=1e-3)
+    assert f["observed_phase_margin_deg"] == pytest.approx(again["phase_margin_deg"], abs=0.1)
+    slower = law_margins(*args, p["vel.fc_hz"] / 2.0, *plant)
+    assert slower["gain_margin"] < f["observed_gain_margin"] < d.margins["gain_margin"]
+    assert slower["phase_margin_deg"] < f["observed_phase_margin_deg"] < d.margins["phase_margin_deg"]
 
 
 def test_integral_loop_gain_max_of_a_pure_delay():

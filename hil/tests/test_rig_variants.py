@@ -1,7 +1,8 @@
 # SPDX-License-Identifier: Apache-2.0
 """Rigs that differ from the nominal one the way real rigs do (hil/scenarios/variants/: Case 3 with
 a slower regulator, a softer and a stiffer spring, a 40 N pull, a heavier load with a noisier
-sensor, the realistic profiles, and combinations), run offline like
+sensor, the realistic profiles, and combinations; the constraint approach on a 3x slower
+regulator), run offline like
 hil/tests/test_acceptance.py: `pmactl commission` on each variant's rig first (over CAN frames,
 hil/commissioned.py), then the real firmware (libpma_offline.so) on the derived set, asserted on
 the simulated results.

@@ -14,7 +14,9 @@ x(s) / p(s) = g e^{-theta s} / (tau s + 1), with g in cm/kPa, fitted by the two-
 whose loop keeps PM_MIN_DEG and GM_MIN on the measured FOPDT (never below tau / SPEEDUP_MAX): a PI equivalent
 Kc, tau_I, which the paper's law realises in its small-signal form
 u = -K_v ((x' - x_r') + K_p e) plus the steady-state feedforward integrator
-(u_ff' = k_ff u_law), i.e. the PID  K_v (K_p + k_ff) + K_v s + K_v K_p k_ff / s.
+(u_ff' = k_ff u_law), i.e. the PID  K_v (K_p + k_ff) + K_v s + K_v K_p k_ff / s. The law sees the
+position and velocity through the tracking observer, placed at FC_PER_CROSSOVER x that loop's
+crossover; the margins of the loop with the observer in it (law_margins) are reported beside the PID's.
 """
 from __future__ import annotations
 
@@ -31,7 +33,11 @@ FIT_LOW, FIT_HIGH = 0.353, 0.853
 TAU_C_PER_THETA = (0.35, 0.5, 0.7, 1.0)
 PM_MIN_DEG, GM_MIN = 45.0, 2.0
 SPEEDUP_MAX = 5.0            # tau_c >= tau / 5: the closed loop at most 5x faster than the open loop
-FC_PER_CROSSOVER = 4.0       # the velocity observer's bandwidth in units of the loop's crossover
+# the velocity observer's bandwidth in units of the loop's crossover: the law's feedforward integrator
+# takes 30/31 of its proportional action through the observer's velocity, whose lag at the crossover
+# is 2 atan(1 / FC_PER_CROSSOVER): 14 deg here, 28 deg at 4x (docs/commissioning.md, "The rules")
+FC_PER_CROSSOVER = 8.0
+FC_MIN_HZ, FC_MAX_HZ = 2.0, 50.0
 FF_PER_KP = 30.0             # the feedforward integrator's gain k_ff in units of K_p
 W2_PER_A = 5.0               # lambda2's barrier at 5 a: theta = a tan(pi r / 2) reaches it at r = 0.87
 NOISE_SIGMAS_IN_W1 = 6.0     # w1 must hold 6 standard deviations of the position noise
@@ -173,12 +179,34 @@ class Derivation:
         return asdict(self)
 
 
+_W = np.logspace(-2, 5, 20000)   # the frequency grid of the margins [rad/s]
+
+
 def loop_margins(kc: float, ki: float, kd: float, gain: float, tau_s: float, theta_s: float) -> dict[str, float]:
     """Phase margin [deg], gain margin [-], crossover [rad/s] and delay margin [s] of the PID
     kc + kd s + ki / s on the FOPDT gain e^{-theta s} / (tau s + 1), on a frequency grid."""
-    w = np.logspace(-2, 5, 20000)
-    s = 1j * w
-    loop = (kc + kd * s + ki / s) * gain * np.exp(-theta_s * s) / (tau_s * s + 1.0)
+    s = 1j * _W
+    return _margins((kc + kd * s + ki / s) * gain * np.exp(-theta_s * s) / (tau_s * s + 1.0))
+
+
+def law_margins(k_v: float, k_p: float, k_ff: float, fc_hz: float, gain: float, tau_s: float,
+                theta_s: float) -> dict[str, float]:
+    """The margins (as loop_margins) of the paper's law in its small-signal form with the options
+    commissioning sets (ppc.obs_pos, ppc.ref_vel: the law sees the tracking observer's position
+    and velocity) on the FOPDT: u_law = K_v (K_p x_hat + v_hat), u = (1 + k_ff / s) u_law. The
+    observer with both poles at -w_o = -2 pi fc passes the position as (2 w_o s + w_o^2) / (s + w_o)^2
+    and the velocity as s w_o^2 / (s + w_o)^2. Without it (fc infinite) this is loop_margins' PID
+    K_v (K_p + k_ff) + K_v s + K_v K_p k_ff / s."""
+    s = 1j * _W
+    wo = 2.0 * math.pi * fc_hz
+    h_x = (2.0 * wo * s + wo * wo) / (s + wo) ** 2
+    h_v = s * wo * wo / (s + wo) ** 2
+    law = k_v * (1.0 + k_ff / s) * (k_p * h_x + h_v)
+    return _margins(law * gain * np.exp(-theta_s * s) / (tau_s * s + 1.0))
+
+
+def _margins(loop: np.ndarray) -> dict[str, float]:
+    w = _W
     mag = np.abs(loop)
     phase = np.unwrap(np.angle(loop))
     cross = np.nonzero((mag[:-1] >= 1.0) & (mag[1:] < 1.0))[0]
@@ -264,13 +292,14 @@ class _Shape:
     k_p: float
     k_v: float
     margins: dict[str, float]
+    fc_hz: float = math.inf
 
 
 def _shape(gain: float, tau: float, theta_eff: float, tau_c_per_theta: float) -> _Shape:
     """SIMC's PI for the FOPDT (gain, tau, theta_eff) with tau_c = tau_c_per_theta * theta_eff,
     in the paper's law's small-signal form K_v ((1 + r) K_p + s + r K_p^2 / s), k_ff = r K_p:
     the PI's Kc and Ki, and a derivative K_v r + 1 times smaller than Kc / K_p; with the
-    margins of that PID on the FOPDT."""
+    margins of that PID on the FOPDT (no observer: its crossover places the observer)."""
     # at most SPEEDUP_MAX times faster than the open loop's lag: a step response with next to no
     # dead time (a valve whose small steps answer at once) must not ask for an unbounded gain
     tau_c = max(tau_c_per_theta * theta_eff, tau / SPEEDUP_MAX)
@@ -281,6 +310,20 @@ def _shape(gain: float, tau: float, theta_eff: float, tau_c_per_theta: float) ->
     k_v = kc / ((1.0 + r) * k_p)
     margins = loop_margins(k_v * (1.0 + r) * k_p, k_v * r * k_p * k_p, k_v, gain, tau, theta_eff)
     return _Shape(tau_c=tau_c, kc=kc, tau_i=tau_i, ki=kc / tau_i, k_p=k_p, k_v=k_v, margins=margins)
+
+
+def _observed(shape: _Shape, gain: float, tau: float, theta_eff: float, fc_per_crossover: float,
+              period_s: float) -> _Shape:
+    """The shape with its velocity observer at fc_per_crossover x the crossover of the loop
+    without it (FC_MIN_HZ..FC_MAX_HZ, and below the tick's Nyquist frequency), and the margins
+    of the loop with the observer in it."""
+    wc = shape.margins["crossover_rad_s"]
+    if not math.isfinite(wc):
+        wc = 1.0 / (shape.tau_c + theta_eff)
+    fc = min(max(fc_per_crossover * wc / (2.0 * math.pi), FC_MIN_HZ), FC_MAX_HZ, 0.4 / period_s)
+    margins = law_margins(shape.k_v, shape.k_p, FF_PER_KP * shape.k_p, fc, gain, tau, theta_eff)
+    return _Shape(tau_c=shape.tau_c, kc=shape.kc, tau_i=shape.tau_i, ki=shape.ki, k_p=shape.k_p, k_v=shape.k_v,
+                  margins=margins, fc_hz=fc)
 
 
 def _ref_span(task: Task, reach_lo: float, reach_hi: float) -> tuple[float, float]:
@@ -340,11 +383,11 @@ def derive(m: Measured, task: Task) -> Derivation:
                         "measured lag: the most robust one is used (see its margins)")
     tau_c, kc, tau_i, ki, r, k_p, k_v, margins = (shape.tau_c, shape.kc, shape.tau_i, shape.ki, FF_PER_KP,
                                                  shape.k_p, shape.k_v, shape.margins)
+    observed = _observed(shape, gain, tau, theta_eff, FC_PER_CROSSOVER, m.period_s)
+    fc_hz = observed.fc_hz
     a = 2.0 * task.w1_cm * k_p / math.pi
     w2 = W2_PER_A * a
     c = 2.0 * w2 * w2 * k_v / math.pi
-    wc = margins["crossover_rad_s"] if math.isfinite(margins["crossover_rad_s"]) else 1.0 / (tau_c + theta_eff)
-    fc_hz = min(max(FC_PER_CROSSOVER * wc / (2.0 * math.pi), 2.0), 50.0)
 
     def u_of(p_kpa: float) -> float:
         return polarity * (p_kpa - p0) / m.kpa_per_u
@@ -410,6 +453,9 @@ def derive(m: Measured, task: Task) -> Derivation:
                "noise_cm": m.noise_cm, "stroke_min_cm": lo, "stroke_max_cm": hi, "hysteresis_kpa_at_p0": hold_hyst,
                "kc_u_per_cm": kc, "tau_i_s": tau_i, "k_p_per_s": k_p, "k_v_u_per_cm_s": k_v, "w1_min_cm": w1_min,
                "v_max_cm_s": v_max, "t_u_min_s": t_u_min,
+               "observed_phase_margin_deg": observed.margins["phase_margin_deg"],
+               "observed_gain_margin": observed.margins["gain_margin"],
+               "observed_delay_margin_s": observed.margins["delay_margin_s"],
                "mfac_k_loop_per_s": mfac.k_loop_per_s,
                "mfac_phase_margin_deg": mfac.margins["phase_margin_deg"],
                "mfac_gain_margin": mfac.margins["gain_margin"],
