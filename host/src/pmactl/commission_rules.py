@@ -292,14 +292,13 @@ class _Shape:
     k_p: float
     k_v: float
     margins: dict[str, float]
-    fc_hz: float = math.inf
 
 
 def _shape(gain: float, tau: float, theta_eff: float, tau_c_per_theta: float) -> _Shape:
     """SIMC's PI for the FOPDT (gain, tau, theta_eff) with tau_c = tau_c_per_theta * theta_eff,
     in the paper's law's small-signal form K_v ((1 + r) K_p + s + r K_p^2 / s), k_ff = r K_p:
     the PI's Kc and Ki, and a derivative K_v r + 1 times smaller than Kc / K_p; with the
-    margins of that PID on the FOPDT (no observer: its crossover places the observer)."""
+    margins of that PID on the FOPDT (without the observer: its crossover places the observer)."""
     # at most SPEEDUP_MAX times faster than the open loop's lag: a step response with next to no
     # dead time (a valve whose small steps answer at once) must not ask for an unbounded gain
     tau_c = max(tau_c_per_theta * theta_eff, tau / SPEEDUP_MAX)
@@ -312,18 +311,13 @@ def _shape(gain: float, tau: float, theta_eff: float, tau_c_per_theta: float) ->
     return _Shape(tau_c=tau_c, kc=kc, tau_i=tau_i, ki=kc / tau_i, k_p=k_p, k_v=k_v, margins=margins)
 
 
-def _observed(shape: _Shape, gain: float, tau: float, theta_eff: float, fc_per_crossover: float,
-              period_s: float) -> _Shape:
-    """The shape with its velocity observer at fc_per_crossover x the crossover of the loop
-    without it (FC_MIN_HZ..FC_MAX_HZ, and below the tick's Nyquist frequency), and the margins
-    of the loop with the observer in it."""
+def _observer_hz(shape: _Shape, theta_eff: float, period_s: float) -> float:
+    """The velocity observer's bandwidth: FC_PER_CROSSOVER x the crossover of the shape's loop
+    without it, within FC_MIN_HZ..FC_MAX_HZ and below the tick's Nyquist frequency."""
     wc = shape.margins["crossover_rad_s"]
     if not math.isfinite(wc):
         wc = 1.0 / (shape.tau_c + theta_eff)
-    fc = min(max(fc_per_crossover * wc / (2.0 * math.pi), FC_MIN_HZ), FC_MAX_HZ, 0.4 / period_s)
-    margins = law_margins(shape.k_v, shape.k_p, FF_PER_KP * shape.k_p, fc, gain, tau, theta_eff)
-    return _Shape(tau_c=shape.tau_c, kc=shape.kc, tau_i=shape.tau_i, ki=shape.ki, k_p=shape.k_p, k_v=shape.k_v,
-                  margins=margins, fc_hz=fc)
+    return min(max(FC_PER_CROSSOVER * wc / (2.0 * math.pi), FC_MIN_HZ), FC_MAX_HZ, 0.4 / period_s)
 
 
 def _ref_span(task: Task, reach_lo: float, reach_hi: float) -> tuple[float, float]:
@@ -383,8 +377,8 @@ def derive(m: Measured, task: Task) -> Derivation:
                         "measured lag: the most robust one is used (see its margins)")
     tau_c, kc, tau_i, ki, r, k_p, k_v, margins = (shape.tau_c, shape.kc, shape.tau_i, shape.ki, FF_PER_KP,
                                                  shape.k_p, shape.k_v, shape.margins)
-    observed = _observed(shape, gain, tau, theta_eff, FC_PER_CROSSOVER, m.period_s)
-    fc_hz = observed.fc_hz
+    fc_hz = _observer_hz(shape, theta_eff, m.period_s)
+    observed = law_margins(k_v, k_p, r * k_p, fc_hz, gain, tau, theta_eff)   # the loop with it
     a = 2.0 * task.w1_cm * k_p / math.pi
     w2 = W2_PER_A * a
     c = 2.0 * w2 * w2 * k_v / math.pi
@@ -453,9 +447,9 @@ def derive(m: Measured, task: Task) -> Derivation:
                "noise_cm": m.noise_cm, "stroke_min_cm": lo, "stroke_max_cm": hi, "hysteresis_kpa_at_p0": hold_hyst,
                "kc_u_per_cm": kc, "tau_i_s": tau_i, "k_p_per_s": k_p, "k_v_u_per_cm_s": k_v, "w1_min_cm": w1_min,
                "v_max_cm_s": v_max, "t_u_min_s": t_u_min,
-               "observed_phase_margin_deg": observed.margins["phase_margin_deg"],
-               "observed_gain_margin": observed.margins["gain_margin"],
-               "observed_delay_margin_s": observed.margins["delay_margin_s"],
+               "observed_phase_margin_deg": observed["phase_margin_deg"],
+               "observed_gain_margin": observed["gain_margin"],
+               "observed_delay_margin_s": observed["delay_margin_s"],
                "mfac_k_loop_per_s": mfac.k_loop_per_s,
                "mfac_phase_margin_deg": mfac.margins["phase_margin_deg"],
                "mfac_gain_margin": mfac.margins["gain_margin"],
