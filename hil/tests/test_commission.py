@@ -205,11 +205,11 @@ def test_derive_places_the_observer_and_reports_the_loop_with_it(theta):
     args = (f["k_v_u_per_cm_s"], f["k_p_per_s"], rules.FF_PER_KP * f["k_p_per_s"])
     plant = (f["gain_cm_per_u"], f["tau_s"], f["theta_eff_s"])
     again = law_margins(*args, p["vel.fc_hz"], *plant)
-    assert f["observed_gain_margin"] == pytest.approx(again["gain_margin"], rel=1e-3)
-    assert f["observed_phase_margin_deg"] == pytest.approx(again["phase_margin_deg"], abs=0.1)
+    assert f["with_observer_gain_margin"] == pytest.approx(again["gain_margin"], rel=1e-3)
+    assert f["with_observer_phase_margin_deg"] == pytest.approx(again["phase_margin_deg"], abs=0.1)
     slower = law_margins(*args, p["vel.fc_hz"] / 2.0, *plant)
-    assert slower["gain_margin"] < f["observed_gain_margin"] < d.margins["gain_margin"]
-    assert slower["phase_margin_deg"] < f["observed_phase_margin_deg"] < d.margins["phase_margin_deg"]
+    assert slower["gain_margin"] < f["with_observer_gain_margin"] < d.margins["gain_margin"]
+    assert slower["phase_margin_deg"] < f["with_observer_phase_margin_deg"] < d.margins["phase_margin_deg"]
 
 
 def test_integral_loop_gain_max_of_a_pure_delay():

@@ -53,8 +53,8 @@ def text(r: Result) -> list[str]:
         f"phase margin {mg['phase_margin_deg']:.0f} deg, gain margin {mg['gain_margin']:.1f}, "
         f"delay margin {1000 * mg['delay_margin_s']:.0f} ms at {mg['crossover_rad_s']:.1f} rad/s",
         f"loop with the velocity observer at {d.params['vel.fc_hz']:g} Hz: phase margin "
-        f"{f['observed_phase_margin_deg']:.0f} deg, gain margin {f['observed_gain_margin']:.1f}, "
-        f"delay margin {1000 * f['observed_delay_margin_s']:.0f} ms",
+        f"{f['with_observer_phase_margin_deg']:.0f} deg, gain margin {f['with_observer_gain_margin']:.1f}, "
+        f"delay margin {1000 * f['with_observer_delay_margin_s']:.0f} ms",
         f"MFAC: lambda {d.params['mfac.lambda']:g}, integral loop gain {f['mfac_k_loop_per_s']:.2f} 1/s at phi = g; "
         f"phase margin {f['mfac_phase_margin_deg']:.0f} deg, gain margin {f['mfac_gain_margin']:.1f}, "
         f"delay margin {1000 * f['mfac_delay_margin_s']:.0f} ms",

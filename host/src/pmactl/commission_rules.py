@@ -196,7 +196,8 @@ def law_margins(k_v: float, k_p: float, k_ff: float, fc_hz: float, gain: float, 
     and velocity) on the FOPDT: u_law = K_v (K_p x_hat + v_hat), u = (1 + k_ff / s) u_law. The
     observer with both poles at -w_o = -2 pi fc passes the position as (2 w_o s + w_o^2) / (s + w_o)^2
     and the velocity as s w_o^2 / (s + w_o)^2. Without it (fc infinite) this is loop_margins' PID
-    K_v (K_p + k_ff) + K_v s + K_v K_p k_ff / s."""
+    K_v (K_p + k_ff) + K_v s + K_v K_p k_ff / s. Units: k_v in input units per cm/s, k_p and k_ff
+    in 1/s, fc_hz in Hz, gain in cm per input unit, tau_s and theta_s in s."""
     s = 1j * _W
     wo = 2.0 * math.pi * fc_hz
     h_x = (2.0 * wo * s + wo * wo) / (s + wo) ** 2
@@ -378,7 +379,7 @@ def derive(m: Measured, task: Task) -> Derivation:
     tau_c, kc, tau_i, ki, r, k_p, k_v, margins = (shape.tau_c, shape.kc, shape.tau_i, shape.ki, FF_PER_KP,
                                                  shape.k_p, shape.k_v, shape.margins)
     fc_hz = _observer_hz(shape, theta_eff, m.period_s)
-    observed = law_margins(k_v, k_p, r * k_p, fc_hz, gain, tau, theta_eff)   # the loop with it
+    with_observer = law_margins(k_v, k_p, r * k_p, fc_hz, gain, tau, theta_eff)   # the loop with it
     a = 2.0 * task.w1_cm * k_p / math.pi
     w2 = W2_PER_A * a
     c = 2.0 * w2 * w2 * k_v / math.pi
@@ -447,9 +448,9 @@ def derive(m: Measured, task: Task) -> Derivation:
                "noise_cm": m.noise_cm, "stroke_min_cm": lo, "stroke_max_cm": hi, "hysteresis_kpa_at_p0": hold_hyst,
                "kc_u_per_cm": kc, "tau_i_s": tau_i, "k_p_per_s": k_p, "k_v_u_per_cm_s": k_v, "w1_min_cm": w1_min,
                "v_max_cm_s": v_max, "t_u_min_s": t_u_min,
-               "observed_phase_margin_deg": observed["phase_margin_deg"],
-               "observed_gain_margin": observed["gain_margin"],
-               "observed_delay_margin_s": observed["delay_margin_s"],
+               "with_observer_phase_margin_deg": with_observer["phase_margin_deg"],
+               "with_observer_gain_margin": with_observer["gain_margin"],
+               "with_observer_delay_margin_s": with_observer["delay_margin_s"],
                "mfac_k_loop_per_s": mfac.k_loop_per_s,
                "mfac_phase_margin_deg": mfac.margins["phase_margin_deg"],
                "mfac_gain_margin": mfac.margins["gain_margin"],
