@@ -47,6 +47,10 @@ int pma_ctrl_start(pma_ctrl_t *s, const pma_params_t *p, float period_s)
         s->ref_ff_u_per_cm = p->ppc_ref_ff;
         s->ref_ff_lead_s = p->ppc_ref_ff_lead_s;
         if (!pma_isfinite_f32(s->ref_ff_u_per_cm) || !(s->ref_ff_lead_s >= 0.0f)) return PMA_ERR_RANGE;
+        if (!(p->ppc_ref_ff_hyst >= 0.0f && p->ppc_ref_ff_hyst_cm > 0.0f)) return PMA_ERR_RANGE;
+        s->hyst_cm = p->ppc_ref_ff_hyst_cm;
+        s->hyst_u_per_cm = p->ppc_ref_ff_hyst / p->ppc_ref_ff_hyst_cm;
+        if (!pma_isfinite_f32(s->hyst_u_per_cm)) return PMA_ERR_RANGE;
         if (s->ppc_obs_pos && su.vel.kind != PMA_VELEST_TRACKING) return PMA_ERR_RANGE;
         pma_ppc_config_t *c = &su.ppc;
         pma_ppc_default_config(c);

@@ -61,6 +61,7 @@ typedef struct pma_ctrl {
     pma_mfac_q16_t shadow;  /* MFAC beside the PPC (fallback), as below */
     pma_q16_t q_period_s, q_w1_cm, q_t_u_s;
     pma_q16_t q_ref_ff_u_per_cm, q_ref_ff_lead_s, q_xr0_cm;
+    pma_q16_t q_hyst_u_per_cm, q_hyst_cm, q_play_z_cm;   /* ref_ff_hyst / ref_ff_hyst_cm, the play */
     pma_ctrl_out_q16_t q_out;
 #else
     pma_ref_f32_t ref;
@@ -72,12 +73,16 @@ typedef struct pma_ctrl {
     } c;
     /* PPC's guarantee monitor and fallback (docs/controllers.md, "When the guarantee is lost") */
     pma_mfac_f32_t shadow;  /* MFAC, learning from the applied input while the PPC is in charge */
+    float play_z_cm;        /* ppc.ref_ff_hyst's play operator: its output z on x_r + lead x_r' [cm] */
 #endif
     uint8_t ppc_ref_vel;    /* option ppc.ref_vel: the law damps x' - x_r' */
     uint8_t ppc_obs_pos;    /* option ppc.obs_pos: the law's x is the observer's x_hat */
     uint8_t xr0_set;        /* xr0_cm holds the reference at START */
     float ref_ff_u_per_cm;  /* option ppc.ref_ff: the static map's slope [input unit/cm] (0: off) */
     float ref_ff_lead_s;    /* ppc.ref_ff_lead_s: how far ahead the feedforward takes x_r [s] */
+    float hyst_u_per_cm;    /* option ppc.ref_ff_hyst over ppc.ref_ff_hyst_cm: the hysteresis term's
+                             * height over the play's half-width [input unit/cm] (0: off) */
+    float hyst_cm;          /* ppc.ref_ff_hyst_cm: the play operator's half-width [cm] */
     float xr0_cm;           /* the reference at START [cm] */
     uint32_t breaches;      /* steps with a barrier clamp since START */
     uint8_t fallback_mode;  /* ppc.fallback: PMA_PPC_FALLBACK_NONE, _MFAC, _WIDEN */
@@ -122,7 +127,7 @@ int pma_ctrl_stream_arith(pma_ctrl_t *s, float target_cm);
  * PMA_OK or the first validation error (PMA_ERR_RANGE, PMA_ERR_BAND, ...;
  * PMA_ERR_RANGE also for ppc.obs_pos without the tracking observer).
  *
- * The PPC options beyond the paper (both off by default) choose what the
+ * The PPC options beyond the paper (all off by default) choose what the
  * unchanged law (pma/ppc.h) is fed, so that eq. 15-22 stay as written:
  *  - ppc.ref_vel: the velocity input is x' - x_r' instead of x', i.e.
  *    lambda2 = alpha (x' - x_r') - theta. The paper's lambda2 damps the
@@ -140,7 +145,14 @@ int pma_ctrl_stream_arith(pma_ctrl_t *s, float target_cm);
  *    lead x_r'), x_r(0) the reference at START: the input the static map
  *    predicts for the reference taken `lead` ahead, so that the law and its
  *    feedforward integrator correct only what the map does not predict. Off
- *    (0) in the paper's law. */
+ *    (0) in the paper's law.
+ *  - ppc.ref_ff_hyst (input unit) with ppc.ref_ff_hyst_cm: added to u_rff, the
+ *    branch of the muscle's hysteresis the reference is on, H (x_a - z) / b
+ *    with x_a = x_r + lead x_r' and z a play operator of half-width b on x_a
+ *    (z(0) = x_a(0)): +H while x_a rises, -H while it falls. It depends on
+ *    the reference alone. Off (0) in the paper's law; PMA_ERR_RANGE for a
+ *    negative H or b <= 0, and in Q16.16 PMA_ERR_FIXED_RANGE where H / b does
+ *    not fit. */
 int pma_ctrl_start(pma_ctrl_t *s, const pma_params_t *p, float period_s);
 
 /* One step at control time t_s with position x_cm; openloop_u is the live

@@ -77,13 +77,21 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
             const float x_law_cm = s->ppc_obs_pos ? s->vel.xh : x_cm;
             const float v_law_cm_s = s->ppc_ref_vel ? o->v_cm_s - o->xr_dot_cm_s : o->v_cm_s;
             float u_ref = 0.0f;   /* the reference feedforward, inside the law's clamp */
-            if (s->ref_ff_u_per_cm != 0.0f) {
+            if (s->ref_ff_u_per_cm != 0.0f || s->hyst_u_per_cm != 0.0f) {
+                const float lead_cm = s->ref_ff_lead_s * o->xr_dot_cm_s;
                 if (!s->xr0_set) {
                     s->xr0_cm = o->xr_cm;
+                    s->play_z_cm = o->xr_cm + lead_cm;
                     s->xr0_set = 1;
                 }
-                const float ahead_cm = (o->xr_cm - s->xr0_cm) + s->ref_ff_lead_s * o->xr_dot_cm_s;
+                const float ahead_cm = (o->xr_cm - s->xr0_cm) + lead_cm;
                 u_ref = s->ref_ff_u_per_cm * ahead_cm;
+                if (s->hyst_u_per_cm != 0.0f) {
+                    /* the play operator: z follows x_a = x_r + lead x_r' at hyst_cm */
+                    const float xa_cm = o->xr_cm + lead_cm;
+                    s->play_z_cm = clampf(s->play_z_cm, xa_cm - s->hyst_cm, xa_cm + s->hyst_cm);
+                    u_ref += s->hyst_u_per_cm * (xa_cm - s->play_z_cm);
+                }
             }
             CHECK(pma_ppc_step_ext_f32(&s->c.ppc, t_s, x_law_cm, v_law_cm_s, o->xr_cm, u_ref, &out));
             o->flags = s->c.ppc.out.flags;

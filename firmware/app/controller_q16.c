@@ -60,6 +60,11 @@ int pma_ctrl_init_arith(pma_ctrl_t *s, const pma_ctrl_setup_t *su)
         CHECK(to_q16(s->t_u_s, &s->q_t_u_s));
         CHECK(to_q16(s->ref_ff_u_per_cm, &s->q_ref_ff_u_per_cm));
         CHECK(to_q16(s->ref_ff_lead_s, &s->q_ref_ff_lead_s));
+        /* the play operator's slope ppc.ref_ff_hyst / ppc.ref_ff_hyst_cm [input unit/cm] must fit
+         * Q16.16, and a term that would round to nothing is refused, not dropped */
+        CHECK(to_q16(s->hyst_u_per_cm, &s->q_hyst_u_per_cm));
+        CHECK(to_q16(s->hyst_cm, &s->q_hyst_cm));
+        if (s->hyst_u_per_cm != 0.0f && (s->q_hyst_u_per_cm == 0 || s->q_hyst_cm == 0)) return PMA_ERR_RANGE;
         CHECK(pma_ppc_init_q16(&s->c.ppc, &su->ppc));
         return s->fallback_mode != PMA_PPC_FALLBACK_NONE ? pma_mfac_init_q16(&s->shadow, &su->mfac)
                                                           : PMA_OK;
@@ -132,14 +137,22 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
             const pma_q16_t x_law = s->ppc_obs_pos ? q32_to_q16(s->vel.xh_q32) : x;
             const pma_q16_t v_law = s->ppc_ref_vel ? pma_q16_ssub(o->v_cm_s, o->xr_dot_cm_s) : o->v_cm_s;
             pma_q16_t u_ref = 0;   /* the reference feedforward, inside the law's clamp */
-            if (s->q_ref_ff_u_per_cm != 0) {
+            if (s->q_ref_ff_u_per_cm != 0 || s->q_hyst_u_per_cm != 0) {
+                const pma_q16_t lead = pma_q16_smul(s->q_ref_ff_lead_s, o->xr_dot_cm_s);
+                const pma_q16_t xa = pma_q16_sadd(o->xr_cm, lead);
                 if (!s->xr0_set) {
                     s->q_xr0_cm = o->xr_cm;
+                    s->q_play_z_cm = xa;
                     s->xr0_set = 1;
                 }
-                const pma_q16_t ahead = pma_q16_sadd(pma_q16_ssub(o->xr_cm, s->q_xr0_cm),
-                                                     pma_q16_smul(s->q_ref_ff_lead_s, o->xr_dot_cm_s));
+                const pma_q16_t ahead = pma_q16_sadd(pma_q16_ssub(o->xr_cm, s->q_xr0_cm), lead);
                 u_ref = pma_q16_smul(s->q_ref_ff_u_per_cm, ahead);
+                if (s->q_hyst_u_per_cm != 0) {   /* the play operator, as controller_f32.c */
+                    const pma_q16_t lo = pma_q16_ssub(xa, s->q_hyst_cm), hi = pma_q16_sadd(xa, s->q_hyst_cm);
+                    s->q_play_z_cm = s->q_play_z_cm < lo ? lo : (s->q_play_z_cm > hi ? hi : s->q_play_z_cm);
+                    const pma_q16_t hyst = pma_q16_smul(s->q_hyst_u_per_cm, pma_q16_ssub(xa, s->q_play_z_cm));
+                    u_ref = pma_q16_sadd(u_ref, hyst);
+                }
             }
             CHECK(pma_ppc_step_ext_q16(&s->c.ppc, t, x_law, v_law, o->xr_cm, u_ref, &out));
             flags = s->c.ppc.out.flags;

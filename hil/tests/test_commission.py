@@ -161,6 +161,38 @@ def test_reference_feedforward_is_the_static_maps_slope_taken_tau_plus_theta_ahe
     assert low.params["ppc.ref_ff"] == pytest.approx(800.0, rel=1e-3)
 
 
+def test_hysteresis_feedforward_is_a_part_of_the_maps_loop_over_the_dead_bands_width():
+    """ppc.ref_ff_hyst: HYST_FF_PART of the half-width of the static map's loop (its median over the
+    reference's range); ppc.ref_ff_hyst_cm: the smallest step gain times half that width (how far
+    the muscle moves while the pressure crosses the loop), at least HYST_PLAY_MIN_CM."""
+    p = [0.0, 200.0, 400.0, 600.0, 800.0]
+    x_up = [-q / 400.0 for q in p]                   # the rising branch 120 kPa above the falling one
+    x_down = [-(q + 120.0) / 400.0 for q in p]
+    m = _measured()
+    m.kpa_per_u = 2.0
+    m.static_map = StaticMap(p, x_up, p, x_down)
+    m.steps[0].gain_cm_per_kpa = -0.0002            # the step into the dead band
+    task = Task(w1_cm=0.2, t_u_s=2.0, x_min_cm=-3.0, x_max_cm=0.0, x_ref_min_cm=-1.5, x_ref_max_cm=-0.7)
+    d = derive(m, task)
+    assert d.params["ppc.ref_ff_hyst"] == pytest.approx(rules.HYST_FF_PART * 60.0 / 2.0, abs=1e-3)
+    assert d.params["ppc.ref_ff_hyst_cm"] == pytest.approx(0.0002 * 60.0, abs=1e-4)
+    # no hysteresis: no term; an ideal backlash (a dead-band step that does not move): the floor
+    m.static_map = StaticMap(p, x_up, p, x_up)
+    assert derive(m, task).params["ppc.ref_ff_hyst"] == 0.0
+    m.static_map = StaticMap(p, x_up, p, x_down)
+    m.steps[0].gain_cm_per_kpa = 0.0
+    assert derive(m, task).params["ppc.ref_ff_hyst_cm"] == pytest.approx(rules.HYST_PLAY_MIN_CM)
+
+
+def test_mfac_reset_threshold_is_a_tenth_of_the_measured_gain():
+    m = _measured()
+    m.kpa_per_u = 2.0                                # gain 0.003 cm/kPa = 0.006 cm per input unit
+    d = derive(m, TASK)
+    assert d.figures["gain_cm_per_u"] == pytest.approx(0.006)
+    assert d.params["mfac.eps"] == pytest.approx(rules.MFAC_EPS_PER_GAIN * 0.006)
+    assert d.params["mfac.eps"] < d.params["mfac.phi1"]      # START's rule |phi1| > eps
+
+
 def test_derive_says_what_the_task_cannot_have():
     noisy = _measured()
     noisy.noise_cm = 0.05

@@ -6,7 +6,8 @@
  * The position is driven exactly along a SINE reference (x = x_r, no noise):
  * the paper's lambda2 = alpha x' - theta then rests at the reference's own
  * speed (theta = 0 at e = 0), ppc.ref_vel's lambda2 = alpha (x' - x_r') at
- * the observer's residual only. */
+ * the observer's residual only. The reference feedforward and its hysteresis term add to
+ * the law's output exactly what their formulas say. */
 #include <math.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -172,6 +173,15 @@ static void test_obs_pos_takes_the_error_from_the_observer(void)
     TEST_ASSERT_FLOAT_WITHIN(1e-6f + TOL_PASS, 0.1f, pma_ctrl_out(&ctl_on)->e_cm);
 }
 
+/* Both slots one step on the sine's sample at t: u_on - u_off */
+static float step_both(float t_s)
+{
+    float u_off, u_on;
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ctrl_step(&ctl_off, t_s, sine_cm(t_s), 0.0f, &u_off));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ctrl_step(&ctl_on, t_s, sine_cm(t_s), 0.0f, &u_on));
+    return u_on - u_off;
+}
+
 /* ppc.ref_ff with its lead: two slots on the same samples, one with the reference feedforward,
  * differ in u by exactly ref_ff ((x_r - x_r(0)) + lead x_r') while neither output saturates. */
 static void test_ref_ff_adds_the_maps_input_for_the_reference_ahead(void)
@@ -185,19 +195,61 @@ static void test_ref_ff_adds_the_maps_input_for_the_reference_ahead(void)
     TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ctrl_start(&ctl_on, &par, PERIOD_S));
     float max_dev = 0.0f;
     for (int k = 0; k < 2000; ++k) {
-        const float t = (float)k * PERIOD_S;
-        float u_off, u_on;
-        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ctrl_step(&ctl_off, t, sine_cm(t), 0.0f, &u_off));
-        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ctrl_step(&ctl_on, t, sine_cm(t), 0.0f, &u_on));
+        const float du = step_both((float)k * PERIOD_S);
         const pma_ctrl_out_t *o = pma_ctrl_out(&ctl_on);
         const float expect = 300.0f * ((o->xr_cm - sine_cm(0.0f)) + 0.08f * o->xr_dot_cm_s);
-        const float dev = fabsf((u_on - u_off) - expect);
+        const float dev = fabsf(du - expect);
         if (dev > max_dev) max_dev = dev;
     }
     TEST_ASSERT_TRUE(max_dev < 1e-2f);
     /* a negative lead is refused at START */
     par.ppc_ref_ff_lead_s = -0.1f;
     TEST_ASSERT_EQUAL_INT(PMA_ERR_RANGE, pma_ctrl_start(&ctl_on, &par, PERIOD_S));
+}
+
+/* ppc.ref_ff_hyst with ppc.ref_ff_hyst_cm: the hysteresis term is H (x_a - z) / b, z a play
+ * (backlash) operator of half-width b on x_a = x_r + lead x_r' from z(0) = x_a(0), computed here
+ * on the slot's own reference: +H while the sine rises (past b), -H while it falls, and across
+ * in between. Refused at START: a negative H, a half-width of 0 and, in Q16.16, a slope H / b
+ * beyond the format's range. */
+static void test_ref_ff_hyst_adds_a_play_operator_on_the_reference(void)
+{
+    const float h = 20.0f, b = 0.1f, lead = 0.08f;
+    sine_params(&par, 1, 0, 1);
+    par.ctrl_u_min = -5000.0f;
+    par.ctrl_u_max = 5000.0f;
+    par.ppc_ref_ff_lead_s = lead;
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ctrl_start(&ctl_off, &par, PERIOD_S));
+    par.ppc_ref_ff_hyst = h;
+    par.ppc_ref_ff_hyst_cm = b;
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ctrl_start(&ctl_on, &par, PERIOD_S));
+    double z = 0.0;
+    float max_dev = 0.0f, lo = 0.0f, hi = 0.0f;
+    for (int k = 0; k < 4000; ++k) {
+        const float du = step_both((float)k * PERIOD_S);
+        const pma_ctrl_out_t *o = pma_ctrl_out(&ctl_on);
+        const double xa = (double)o->xr_cm + (double)lead * (double)o->xr_dot_cm_s;
+        z = (k == 0) ? xa : fmin(fmax(z, xa - b), xa + b);
+        const float dev = fabsf(du - (float)(h * (xa - z) / b));
+        if (dev > max_dev) max_dev = dev;
+        if (du < lo) lo = du;
+        if (du > hi) hi = du;
+    }
+    TEST_ASSERT_TRUE(max_dev < 1e-2f);
+    TEST_ASSERT_FLOAT_WITHIN(1e-2f, -h, lo);   /* both branches reached over two periods */
+    TEST_ASSERT_FLOAT_WITHIN(1e-2f, h, hi);
+    par.ppc_ref_ff_hyst = -1.0f;
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_RANGE, pma_ctrl_start(&ctl_on, &par, PERIOD_S));
+    par.ppc_ref_ff_hyst = h;
+    par.ppc_ref_ff_hyst_cm = 0.0f;
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_RANGE, pma_ctrl_start(&ctl_on, &par, PERIOD_S));
+    par.ppc_ref_ff_hyst = 1000.0f;
+    par.ppc_ref_ff_hyst_cm = 0.01f;   /* 1e5 input units per cm */
+#if PMA_CTRL_Q16
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_FIXED_RANGE, pma_ctrl_start(&ctl_on, &par, PERIOD_S));
+#else
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ctrl_start(&ctl_on, &par, PERIOD_S));
+#endif
 }
 
 /* Q16.16 time ends at 32767 s: the Q16.16 slot refuses a step past it (the application then
@@ -224,6 +276,7 @@ int main(void)
     RUN_TEST(test_ref_vel_damps_the_velocity_error);
     RUN_TEST(test_obs_pos_takes_the_error_from_the_observer);
     RUN_TEST(test_ref_ff_adds_the_maps_input_for_the_reference_ahead);
+    RUN_TEST(test_ref_ff_hyst_adds_a_play_operator_on_the_reference);
     RUN_TEST(test_time_beyond_the_fixed_point_range);
     return UNITY_END();
 }

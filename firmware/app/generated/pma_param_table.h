@@ -40,6 +40,8 @@ enum pma_param_id {
     PMA_PARAM_MFAC_EPS = 52,
     PMA_PARAM_MFAC_PHI1 = 53,
     PMA_PARAM_MFAC_U_INIT = 54,
+    PMA_PARAM_PPC_REF_FF_HYST = 55,
+    PMA_PARAM_PPC_REF_FF_HYST_CM = 56,
     PMA_PARAM_PID_KP = 64,
     PMA_PARAM_PID_KI = 65,
     PMA_PARAM_PID_KD = 66,
@@ -81,9 +83,9 @@ enum pma_param_id {
     PMA_PARAM_SAFETY_SAFE_KPA = 168,
 };
 
-#define PMA_PARAM_COUNT 72u
+#define PMA_PARAM_COUNT 74u
 /* CRC-32 of the table (pmactl.protocol.param_table_hash): DEVICE_INFO's ParamTableHash. */
-#define PMA_PARAM_TABLE_HASH 0x709858EBu
+#define PMA_PARAM_TABLE_HASH 0x0F601128u
 
 #define PMA_SYS_PLANT_BRIDGE_OFF 0u
 #define PMA_SYS_PLANT_BRIDGE_ON 1u
@@ -143,6 +145,8 @@ typedef struct pma_params {
     float mfac_eps;                    /* id 52 */
     float mfac_phi1;                   /* id 53 [cm/input unit] */
     float mfac_u_init;                 /* id 54 [input unit] */
+    float ppc_ref_ff_hyst;             /* id 55 [input unit] */
+    float ppc_ref_ff_hyst_cm;          /* id 56 [cm] */
     float pid_kp;                      /* id 64 [input unit/cm] */
     float pid_ki;                      /* id 65 [input unit/(cm*s)] */
     float pid_kd;                      /* id 66 [input unit*s/cm] */

@@ -45,6 +45,17 @@ NOISE_SIGMAS_IN_W1 = 6.0     # w1 must hold 6 standard deviations of the positio
 # only for steps that moved MOVED_SIGMAS of them in all (a smaller one is mostly noise)
 MOVE_SIGMAS, MOVED_SIGMAS = 4.0, 10.0
 MFAC_ETA, MFAC_MU, MFAC_RHO, MFAC_LAMBDA = 0.5, 1.9, 31.7, 0.03   # the paper's MFAC gains
+# MFAC's reset threshold eps in units of the measured gain g (the paper's "about 1e-5" is a number in
+# its own units): an estimate phi below g / 10 learned from a stretch where the input moved and the
+# muscle could not (the hysteresis' dead band, the end of the stroke, a saturated valve), and its
+# step rho phi / (lambda + phi^2) then all but stops the loop; the reset rule puts it back to phi(1)
+MFAC_EPS_PER_GAIN = 0.1
+# the reference feedforward's hysteresis term (ppc.ref_ff_hyst): this part of the half-width of the
+# static map's loop. A slow sweep's loop is the widest the muscle shows (minor loops are narrower, and
+# creep and the valve's own hysteresis widen a slow sweep's); under-compensation leaves the rest to
+# the feedforward integrator, over-compensation makes an error of the other sign at every reversal
+HYST_FF_PART = 0.25
+HYST_PLAY_MIN_CM = 0.001     # the play's half-width at least 10 um (an ideal backlash: a step of 2 H)
 
 
 class CommissionError(ValueError):
@@ -334,6 +345,19 @@ def _ref_span(task: Task, reach_lo: float, reach_hi: float) -> tuple[float, floa
     return lo, hi
 
 
+def _hysteresis_ff(m: Measured, xs: list[float]) -> tuple[float, float]:
+    """The reference feedforward's hysteresis term: its height H (ppc.ref_ff_hyst, input units),
+    HYST_FF_PART of the half-width of the static map's loop, its median over the reference's range;
+    the play's half-width b (ppc.ref_ff_hyst_cm): how far the muscle moves while the pressure
+    crosses the loop after a reversal, the smallest step gain (a step into the dead band: the
+    steps that raise the pressure after a settle from above) times half the loop's width."""
+    h_kpa = float(np.median([m.static_map.hysteresis_kpa(x) for x in xs]))
+    height = HYST_FF_PART * 0.5 * h_kpa / m.kpa_per_u
+    g_dead = min(abs(s.gain_cm_per_kpa) for s in m.steps)
+    # the Q16.16 builds hold H / b (input units per cm) below 32767: b at least H / 16384
+    return height, max(g_dead * 0.5 * h_kpa, HYST_PLAY_MIN_CM, height / 16384.0)
+
+
 def derive(m: Measured, task: Task) -> Derivation:
     """The parameters for the paper's controller and MFAC on this rig and task (module doc)."""
     if not m.steps:
@@ -395,6 +419,7 @@ def derive(m: Measured, task: Task) -> Derivation:
     xs = np.linspace(*_ref_span(task, reach_lo, reach_hi), 9)
     ref_ff = float(np.polyfit(xs, [u_of(m.static_map.hold_kpa(x)) for x in xs], 1)[0])
     ref_ff_lead = tau + theta_eff
+    hyst_ff, hyst_cm = _hysteresis_ff(m, [float(x) for x in xs])
 
     w1_min = NOISE_SIGMAS_IN_W1 * m.noise_cm
     promises = [f"|e| < w1 = {task.w1_cm:g} cm needs w1 >= {w1_min:.4f} cm for this sensor's noise "
@@ -431,6 +456,8 @@ def derive(m: Measured, task: Task) -> Derivation:
         "ppc.ref_vel": 1,
         "ppc.ref_ff": round(ref_ff, 3),
         "ppc.ref_ff_lead_s": round(ref_ff_lead, 4),
+        "ppc.ref_ff_hyst": round(hyst_ff, 3),
+        "ppc.ref_ff_hyst_cm": round(hyst_cm, 4),
         "ppc.obs_pos": 1,
         "vel.kind": 1,
         "vel.fc_hz": round(fc_hz, 2),
@@ -438,6 +465,7 @@ def derive(m: Measured, task: Task) -> Derivation:
         "mfac.mu": MFAC_MU,
         "mfac.rho": MFAC_RHO,
         "mfac.lambda": round(mfac.lam, 5),
+        "mfac.eps": float(f"{MFAC_EPS_PER_GAIN * gain:.3g}"),
         "mfac.phi1": round(mfac.phi1, 5),
         "mfac.u_init": round(u_start, 2),
         "safety.x_min_cm": task.x_min_cm,
