@@ -45,9 +45,18 @@ def _moved_columns(a: np.ndarray, b: np.ndarray) -> tuple[int, int]:
     return len(cols), moved
 
 
-def test_headless_frames_show_moving_telemetry(fake, pmactl, tmp_path: Path) -> None:
+def test_headless_frames_show_moving_telemetry(fake, pmactl, tmp_path: Path, hooks: list[Any]) -> None:
     node = fake(motion="sine")
     node.set_state("RUNNING")
+
+    def hook(sc: scope.Scope, frames: int) -> None:
+        # each frame draws at least 10 more telemetry rows (0.1 s of the node's data time),
+        # however slowly the fake node's thread runs on a loaded machine: frames count data
+        tr = sc.traces[0]
+        rows = tr.rows
+        wait_until(lambda: (sc.poll(), tr.rows)[1] >= rows + 10)
+
+    hooks.append(hook)
     r = pmactl("scope", "--headless", "--frames", "6", "--out", str(tmp_path / "f"),
                "--host-heartbeat", "--window", "3")
     assert r.code == EXIT_OK, r.err
