@@ -58,6 +58,9 @@ def text(r: Result) -> list[str]:
         f"MFAC: lambda {d.params['mfac.lambda']:g}, integral loop gain {f['mfac_k_loop_per_s']:.2f} 1/s at phi = g; "
         f"phase margin {f['mfac_phase_margin_deg']:.0f} deg, gain margin {f['mfac_gain_margin']:.1f}, "
         f"delay margin {1000 * f['mfac_delay_margin_s']:.0f} ms",
+        f"hysteresis: {f['hysteresis_kpa_over_ref']:.0f} kPa over the reference's range; the reference "
+        f"feedforward's term +-{d.params['ppc.ref_ff_hyst']:g} input units across a play of "
+        f"{d.params['ppc.ref_ff_hyst_cm']:g} cm; MFAC's reset threshold {d.params['mfac.eps']:g}",
         "derived parameters:",
     ]
     for name, value in d.params.items():

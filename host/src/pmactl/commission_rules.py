@@ -17,6 +17,8 @@ u = -K_v ((x' - x_r') + K_p e) plus the steady-state feedforward integrator
 (u_ff' = k_ff u_law), i.e. the PID  K_v (K_p + k_ff) + K_v s + K_v K_p k_ff / s. The law sees the
 position and velocity through the tracking observer, placed at FC_PER_CROSSOVER x that loop's
 crossover; the margins of the loop with the observer in it (law_margins) are reported beside the PID's.
+The reference feedforward takes the static map's slope, and its hysteresis term (_hysteresis_ff) the
+branch of the map's loop the reference is on; MFAC's reset threshold is a tenth of the measured gain.
 """
 from __future__ import annotations
 
@@ -345,17 +347,18 @@ def _ref_span(task: Task, reach_lo: float, reach_hi: float) -> tuple[float, floa
     return lo, hi
 
 
-def _hysteresis_ff(m: Measured, xs: list[float]) -> tuple[float, float]:
+def _hysteresis_ff(m: Measured, xs: list[float]) -> tuple[float, float, float]:
     """The reference feedforward's hysteresis term: its height H (ppc.ref_ff_hyst, input units),
     HYST_FF_PART of the half-width of the static map's loop, its median over the reference's range;
     the play's half-width b (ppc.ref_ff_hyst_cm): how far the muscle moves while the pressure
     crosses the loop after a reversal, the smallest step gain (a step into the dead band: the
-    steps that raise the pressure after a settle from above) times half the loop's width."""
+    steps that raise the pressure after a settle from above) times half the loop's width; and
+    that width [kPa]."""
     h_kpa = float(np.median([m.static_map.hysteresis_kpa(x) for x in xs]))
     height = HYST_FF_PART * 0.5 * h_kpa / m.kpa_per_u
     g_dead = min(abs(s.gain_cm_per_kpa) for s in m.steps)
     # the Q16.16 builds hold H / b (input units per cm) below 32767: b at least H / 16384
-    return height, max(g_dead * 0.5 * h_kpa, HYST_PLAY_MIN_CM, height / 16384.0)
+    return height, max(g_dead * 0.5 * h_kpa, HYST_PLAY_MIN_CM, height / 16384.0), h_kpa
 
 
 def derive(m: Measured, task: Task) -> Derivation:
@@ -419,7 +422,7 @@ def derive(m: Measured, task: Task) -> Derivation:
     xs = np.linspace(*_ref_span(task, reach_lo, reach_hi), 9)
     ref_ff = float(np.polyfit(xs, [u_of(m.static_map.hold_kpa(x)) for x in xs], 1)[0])
     ref_ff_lead = tau + theta_eff
-    hyst_ff, hyst_cm = _hysteresis_ff(m, [float(x) for x in xs])
+    hyst_ff, hyst_cm, hyst_kpa = _hysteresis_ff(m, [float(x) for x in xs])
 
     w1_min = NOISE_SIGMAS_IN_W1 * m.noise_cm
     promises = [f"|e| < w1 = {task.w1_cm:g} cm needs w1 >= {w1_min:.4f} cm for this sensor's noise "
@@ -474,6 +477,7 @@ def derive(m: Measured, task: Task) -> Derivation:
     figures = {"gain_cm_per_u": gain, "tau_s": tau, "theta_s": theta, "theta_fit_s": theta_fit,
                "theta_first_move_s": theta_move, "theta_eff_s": theta_eff, "tau_c_s": tau_c,
                "noise_cm": m.noise_cm, "stroke_min_cm": lo, "stroke_max_cm": hi, "hysteresis_kpa_at_p0": hold_hyst,
+               "hysteresis_kpa_over_ref": hyst_kpa,
                "kc_u_per_cm": kc, "tau_i_s": tau_i, "k_p_per_s": k_p, "k_v_u_per_cm_s": k_v, "w1_min_cm": w1_min,
                "v_max_cm_s": v_max, "t_u_min_s": t_u_min,
                "with_observer_phase_margin_deg": with_observer["phase_margin_deg"],
