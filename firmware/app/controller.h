@@ -152,7 +152,7 @@ int pma_ctrl_stream_arith(pma_ctrl_t *s, float target_cm);
  *    (z(0) = x_a(0)): +H while x_a rises, -H while it falls. It depends on
  *    the reference alone. Off (0) in the paper's law; PMA_ERR_RANGE for a
  *    negative H or b <= 0, and in Q16.16 PMA_ERR_FIXED_RANGE where H / b does
- *    not fit. */
+ *    not fit or the term would round to nothing. */
 int pma_ctrl_start(pma_ctrl_t *s, const pma_params_t *p, float period_s);
 
 /* One step at control time t_s with position x_cm; openloop_u is the live

@@ -79,16 +79,16 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
             float u_ref = 0.0f;   /* the reference feedforward, inside the law's clamp */
             if (s->ref_ff_u_per_cm != 0.0f || s->hyst_u_per_cm != 0.0f) {
                 const float lead_cm = s->ref_ff_lead_s * o->xr_dot_cm_s;
+                const float xa_cm = o->xr_cm + lead_cm;   /* x_a: the reference taken lead ahead */
                 if (!s->xr0_set) {
                     s->xr0_cm = o->xr_cm;
-                    s->play_z_cm = o->xr_cm + lead_cm;
+                    s->play_z_cm = xa_cm;
                     s->xr0_set = 1;
                 }
                 const float ahead_cm = (o->xr_cm - s->xr0_cm) + lead_cm;
                 u_ref = s->ref_ff_u_per_cm * ahead_cm;
                 if (s->hyst_u_per_cm != 0.0f) {
-                    /* the play operator: z follows x_a = x_r + lead x_r' at hyst_cm */
-                    const float xa_cm = o->xr_cm + lead_cm;
+                    /* the play operator: z follows x_a at hyst_cm */
                     s->play_z_cm = clampf(s->play_z_cm, xa_cm - s->hyst_cm, xa_cm + s->hyst_cm);
                     u_ref += s->hyst_u_per_cm * (xa_cm - s->play_z_cm);
                 }

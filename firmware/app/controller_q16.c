@@ -64,7 +64,7 @@ int pma_ctrl_init_arith(pma_ctrl_t *s, const pma_ctrl_setup_t *su)
          * Q16.16, and a term that would round to nothing is refused, not dropped */
         CHECK(to_q16(s->hyst_u_per_cm, &s->q_hyst_u_per_cm));
         CHECK(to_q16(s->hyst_cm, &s->q_hyst_cm));
-        if (s->hyst_u_per_cm != 0.0f && (s->q_hyst_u_per_cm == 0 || s->q_hyst_cm == 0)) return PMA_ERR_RANGE;
+        if (s->hyst_u_per_cm != 0.0f && (s->q_hyst_u_per_cm == 0 || s->q_hyst_cm == 0)) return PMA_ERR_FIXED_RANGE;
         CHECK(pma_ppc_init_q16(&s->c.ppc, &su->ppc));
         return s->fallback_mode != PMA_PPC_FALLBACK_NONE ? pma_mfac_init_q16(&s->shadow, &su->mfac)
                                                           : PMA_OK;
@@ -149,7 +149,7 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
                 u_ref = pma_q16_smul(s->q_ref_ff_u_per_cm, ahead);
                 if (s->q_hyst_u_per_cm != 0) {   /* the play operator, as controller_f32.c */
                     const pma_q16_t lo = pma_q16_ssub(xa, s->q_hyst_cm), hi = pma_q16_sadd(xa, s->q_hyst_cm);
-                    s->q_play_z_cm = s->q_play_z_cm < lo ? lo : (s->q_play_z_cm > hi ? hi : s->q_play_z_cm);
+                    s->q_play_z_cm = pma_q16_clamp(s->q_play_z_cm, lo, hi);
                     const pma_q16_t hyst = pma_q16_smul(s->q_hyst_u_per_cm, pma_q16_ssub(xa, s->q_play_z_cm));
                     u_ref = pma_q16_sadd(u_ref, hyst);
                 }
