@@ -76,6 +76,40 @@ def test_first_movement_shows_the_dead_time_a_slow_tail_hides():
     assert d.figures["kc_u_per_cm"] < derive(_measured(theta=0.0, tau=0.2), TASK).figures["kc_u_per_cm"]
 
 
+def test_early_lag_shows_the_fast_part_a_slow_tail_hides():
+    """A response whose fast part is followed by a slow tail fits as a long lag; the early lag
+    (10 % to 35 % of the step) is that of the fast part, and the rules design on it: a lower gain
+    Kc, the loop's crossover where the fast part is. On a plain FOPDT the early lag is the lag,
+    and the design does not change."""
+    rng = np.random.default_rng(3)
+    t = np.arange(0.0, 1.0, 1e-3)
+    theta, dp, noise = 0.035, -45.0, 1.4e-3
+    moving = np.where(t > theta, 1.0, 0.0)
+    fast_tau, slow_tau = 0.04, 0.5
+    shape = moving * (0.6 * (1 - np.exp(-(t - theta) / fast_tau)) + 0.4 * (1 - np.exp(-(t - theta) / slow_tau)))
+    f = fit_step(t, -1.0 + 0.19 * shape + rng.normal(0, noise, t.size), 300.0, dp, noise_cm=noise)
+    # the fit's lag is the tail's; the early lag is within 2.5x the fast part's (0.6 of the step
+    # in it: from 10 % to 35 % a single lag 0.6 / 0.35 slower than the fast part alone)
+    assert f.tau_s > 4 * fast_tau
+    assert fast_tau <= f.tau_early_s <= 2.5 * fast_tau
+    fopdt = moving * (1 - np.exp(-(t - theta) / 0.05))
+    g = fit_step(t, -1.0 + 0.19 * fopdt + rng.normal(0, noise, t.size), 300.0, dp, noise_cm=noise)
+    assert g.tau_early_s == pytest.approx(g.tau_s, rel=0.25)
+    assert math.isnan(fit_step(t, -1.0 + 0.19 * shape, 300.0, dp).tau_early_s)   # no noise given: not measured
+    small = -1.0 + 5 * noise * shape + rng.normal(0, noise, t.size)
+    assert math.isnan(fit_step(t, small, 300.0, dp, noise_cm=noise).tau_early_s)   # too small to tell
+
+    tail, plain = _measured(tau=f.tau_s), _measured(tau=f.tau_s)
+    for s in tail.steps:
+        s.tau_early_s = f.tau_early_s
+    for s in plain.steps:
+        s.tau_early_s = 2 * f.tau_s          # an early part slower than the fit: the fit's lag stands
+    d_tail, d_plain, d_fit = derive(tail, TASK), derive(plain, TASK), derive(_measured(tau=f.tau_s), TASK)
+    assert d_tail.figures["tau_s"] == pytest.approx(f.tau_early_s)
+    assert d_plain.figures == d_fit.figures
+    assert d_tail.figures["kc_u_per_cm"] < d_fit.figures["kc_u_per_cm"]
+
+
 def test_fit_step_refuses_a_flat_or_short_record():
     t = np.arange(0.0, 1.0, 1e-3)
     with pytest.raises(CommissionError):

@@ -48,7 +48,7 @@ def text(r: Result) -> list[str]:
         f"{min(m.static_map.p_down_kpa):.0f}..{max(m.static_map.p_down_kpa):.0f} kPa; hysteresis "
         f"{f['hysteresis_kpa_at_p0']:.0f} kPa at the preset pressure",
         f"step responses (median of {len(m.steps)}): gain {f['gain_cm_per_u']:.5f} cm per input unit, "
-        f"lag {1000 * f['tau_s']:.1f} ms, dead time {1000 * f['theta_s']:.1f} ms",
+        f"lag {1000 * f['tau_s']:.1f} ms{_early_lag(f)}, dead time {1000 * f['theta_s']:.1f} ms",
         f"loop: SIMC PI Kc {f['kc_u_per_cm']:.1f} per cm, tau_I {1000 * f['tau_i_s']:.1f} ms; "
         f"phase margin {mg['phase_margin_deg']:.0f} deg, gain margin {mg['gain_margin']:.1f}, "
         f"delay margin {1000 * mg['delay_margin_s']:.0f} ms at {mg['crossover_rad_s']:.1f} rad/s",
@@ -72,6 +72,13 @@ def text(r: Result) -> list[str]:
     else:
         lines.append("nothing changed on the node (--apply sets them)")
     return lines
+
+
+def _early_lag(f: dict[str, float]) -> str:
+    """Where the steps' early parts set the lag (a slow tail stretched the fits'), the fits' median."""
+    if f["tau_s"] >= f["tau_fit_s"]:
+        return ""
+    return f" (the early parts' lag; the fits, stretched by a slow tail, say {1000 * f['tau_fit_s']:.1f} ms)"
 
 
 def write(r: Result, out: Path, proto: Protocol, node: int) -> list[Path]:

@@ -30,6 +30,10 @@ import numpy as np
 
 # two-point FOPDT fit (Sundaresan & Krishnaswamy 1978)
 FIT_LOW, FIT_HIGH = 0.353, 0.853
+# the response's early lag: from FIT_EARLY to FIT_LOW of the step an FOPDT takes tau ln(0.9 / 0.647);
+# a response with a slow tail (creep, a slow valve stage) gets there faster than its fitted lag says
+FIT_EARLY = 0.1
+EARLY_SMOOTH = 5             # samples of the centred moving average the early lag's crossings are read on
 # SIMC's closed-loop time constant tau_c in units of theta_eff: the tightest of these whose loop keeps
 # both margins below on the measured FOPDT (SIMC's own "tight control" is tau_c = theta)
 TAU_C_PER_THETA = (0.35, 0.5, 0.7, 1.0)
@@ -76,6 +80,9 @@ class StepFit:
     # the time x takes to move MOVE_SIGMAS noise standard deviations from its start: the dead
     # time as the loop meets it (nan: not measured, or the step moved too little to tell)
     first_move_s: float = math.nan
+    # the lag of the response's early part (FIT_EARLY to FIT_LOW of the step), what the loop
+    # meets at its crossover: below tau_s where a slow tail stretches the fit (nan: not measured)
+    tau_early_s: float = math.nan
 
 
 @dataclass
@@ -135,12 +142,17 @@ def fit_step(t_s: np.ndarray, x_cm: np.ndarray, p_kpa: float, dp_kpa: float,
     theta = max(1.3 * t_low - 0.29 * t_high, 0.0)
     model = np.where(t > theta, 1.0 - np.exp(-(t - theta) / tau), 0.0)
     rms = float(np.sqrt(np.mean((y - model) ** 2)) * abs(dx))
-    first_move = math.nan
+    first_move = tau_early = math.nan
     if noise_cm is not None and noise_cm > 0 and abs(dx) >= MOVED_SIGMAS * noise_cm:
         moved = np.nonzero(np.abs(x - x0) >= MOVE_SIGMAS * noise_cm)[0]
         first_move = float(t[moved[0]]) if len(moved) else math.nan
+        # on the smoothed response, where FIT_EARLY of a step of MOVED_SIGMAS stands clear of the noise
+        # (a noise crossing before the movement makes the early lag longer: then the fit's stands)
+        smooth = np.convolve(y, np.ones(EARLY_SMOOTH) / EARLY_SMOOTH, mode="same")[: len(y) - EARLY_SMOOTH // 2]
+        t_early, t_low_s = _first_crossing(t, smooth, FIT_EARLY), _first_crossing(t, smooth, FIT_LOW)
+        tau_early = max(t_low_s - t_early, 0.0) / math.log((1.0 - FIT_EARLY) / (1.0 - FIT_LOW))
     return StepFit(p_kpa=p_kpa, dp_kpa=dp_kpa, gain_cm_per_kpa=dx / dp_kpa, tau_s=tau, theta_s=theta, rms_cm=rms,
-                   first_move_s=first_move)
+                   first_move_s=first_move, tau_early_s=tau_early)
 
 
 def _first_crossing(t: np.ndarray, y: np.ndarray, level: float) -> float:
@@ -387,7 +399,12 @@ def derive(m: Measured, task: Task) -> Derivation:
     gain = float(np.median([abs(s.gain_cm_per_kpa) for s in m.steps])) * m.kpa_per_u   # cm per input unit
     # the median of the six steps (three operating points, up and down): one step through the
     # hysteresis' dead band shows a late, slow response that is not the loop's
-    tau = float(np.median([s.tau_s for s in m.steps]))
+    # each step's lag, or its early part's where that is shorter: a slow tail (creep, a slow valve
+    # stage) fits as a long lag, but the loop's crossover meets the fast part, whose gain per second
+    # is larger than the fit's g / tau (a design on the fit's lag runs the loop faster than it can go)
+    tau = float(np.median([min(s.tau_s, s.tau_early_s) if math.isfinite(s.tau_early_s) else s.tau_s
+                           for s in m.steps]))
+    tau_fit = float(np.median([s.tau_s for s in m.steps]))
     theta_fit = float(np.median([s.theta_s for s in m.steps]))
     # the fit's dead time, but never less than the steps' first movement: a response whose slow
     # tail (creep, a slow valve stage) dominates fits as a long lag with no dead time, though the
@@ -474,7 +491,7 @@ def derive(m: Measured, task: Task) -> Derivation:
         "safety.x_min_cm": task.x_min_cm,
         "safety.x_max_cm": task.x_max_cm,
     }
-    figures = {"gain_cm_per_u": gain, "tau_s": tau, "theta_s": theta, "theta_fit_s": theta_fit,
+    figures = {"gain_cm_per_u": gain, "tau_s": tau, "tau_fit_s": tau_fit, "theta_s": theta, "theta_fit_s": theta_fit,
                "theta_first_move_s": theta_move, "theta_eff_s": theta_eff, "tau_c_s": tau_c,
                "noise_cm": m.noise_cm, "stroke_min_cm": lo, "stroke_max_cm": hi, "hysteresis_kpa_at_p0": hold_hyst,
                "hysteresis_kpa_over_ref": hyst_kpa,
