@@ -110,6 +110,26 @@ def test_early_lag_shows_the_fast_part_a_slow_tail_hides():
     assert d_tail.figures["kc_u_per_cm"] < d_fit.figures["kc_u_per_cm"]
 
 
+def test_loop_gain_is_the_median_of_the_steps_slopes():
+    """Three steps into the hysteresis' dead band (next to no movement, their lags noise) and
+    three that move on a long lag: the loop's gain at its crossover is each step's g / tau, their
+    median, times the median lag; the ratio of the median gain to the median lag would pair a
+    dead-band step's gain with a moving step's lag and design a loop 5/3 times too fast. MFAC's
+    reset threshold keeps the median gain (MFAC estimates the step's dx/du)."""
+    gains, lags = [-0.0002, -0.0002, -0.0002, -0.004, -0.004, -0.004], [0.02, 0.5, 0.03, 0.3, 0.3, 0.3]
+    m = _measured()
+    m.steps = [StepFit(300.0 + 100 * i, 40.0, g, tau, 0.01, 0.0) for i, (g, tau) in enumerate(zip(gains, lags))]
+    d = derive(m, TASK)
+    f = d.figures
+    per_s = float(np.median([abs(g) / tau for g, tau in zip(gains, lags)]))
+    assert f["tau_s"] == pytest.approx(0.3)
+    assert f["loop_gain_cm_per_u"] == pytest.approx(per_s * 0.3)
+    assert f["gain_cm_per_u"] == pytest.approx(0.0021)
+    assert f["loop_gain_cm_per_u"] / f["gain_cm_per_u"] == pytest.approx(5.0 / 3.0)
+    assert f["kc_u_per_cm"] == pytest.approx(0.3 / (f["loop_gain_cm_per_u"] * (f["tau_c_s"] + f["theta_eff_s"])))
+    assert d.params["mfac.eps"] == pytest.approx(rules.MFAC_EPS_PER_GAIN * 0.0021)
+
+
 def test_fit_step_refuses_a_flat_or_short_record():
     t = np.arange(0.0, 1.0, 1e-3)
     with pytest.raises(CommissionError):

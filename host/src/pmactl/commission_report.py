@@ -47,7 +47,8 @@ def text(r: Result) -> list[str]:
         f"static map: stroke {f['stroke_min_cm']:.3f}..{f['stroke_max_cm']:.3f} cm over "
         f"{min(m.static_map.p_down_kpa):.0f}..{max(m.static_map.p_down_kpa):.0f} kPa; hysteresis "
         f"{f['hysteresis_kpa_at_p0']:.0f} kPa at the preset pressure",
-        f"step responses (median of {len(m.steps)}): gain {f['gain_cm_per_u']:.5f} cm per input unit, "
+        f"step responses (median of {len(m.steps)}): gain {f['gain_cm_per_u']:.5f} cm per input unit "
+        f"({f['loop_gain_cm_per_u']:.5f} at the loop's crossover), "
         f"lag {1000 * f['tau_s']:.1f} ms{_early_lag(f)}, dead time {1000 * f['theta_s']:.1f} ms",
         f"loop: SIMC PI Kc {f['kc_u_per_cm']:.1f} per cm, tau_I {1000 * f['tau_i_s']:.1f} ms; "
         f"phase margin {mg['phase_margin_deg']:.0f} deg, gain margin {mg['gain_margin']:.1f}, "

@@ -9,7 +9,9 @@ its unit (u = polarity * (p - p0) / act.kpa_per_u).
 The model the rules use is the one a step response shows on any such rig: around an operating
 point the position follows the pressure like a first-order lag with a dead time (FOPDT),
 x(s) / p(s) = g e^{-theta s} / (tau s + 1), with g in cm/kPa, fitted by the two-point method
-(the times to 35.3 % and 85.3 % of the step). The loop is then shaped by the SIMC rule
+(the times to 35.3 % and 85.3 % of the step), or, where a slow tail stretches that fit, the lag of
+the response's early part; the loop's FOPDT takes the median lag and the median of the steps'
+slopes g / tau (MFAC the median gain). The loop is then shaped by the SIMC rule
 (Skogestad 2003) with the closed-loop time constant tau_c the tightest of TAU_C_PER_THETA x theta_eff
 whose loop keeps PM_MIN_DEG and GM_MIN on the measured FOPDT (never below tau / SPEEDUP_MAX): a PI equivalent
 Kc, tau_I, which the paper's law realises in its small-signal form
@@ -395,16 +397,22 @@ def derive(m: Measured, task: Task) -> Derivation:
     x_start = x_mid if task.x_start_cm is None else min(max(task.x_start_cm, reach_lo), reach_hi)
     p0 = m.static_map.hold_kpa(x_mid)
 
-    # the plant as the controller sees it: u in its unit, dx/du > 0 with the derived polarity
+    # the plant as the controller sees it: u in its unit, dx/du > 0 with the derived polarity. The
+    # median of the six steps (three operating points, up and down): a step through the hysteresis'
+    # dead band shows a late, slow response that is not the loop's. MFAC's rules take this gain
     gain = float(np.median([abs(s.gain_cm_per_kpa) for s in m.steps])) * m.kpa_per_u   # cm per input unit
-    # the median of the six steps (three operating points, up and down): one step through the
-    # hysteresis' dead band shows a late, slow response that is not the loop's
     # each step's lag, or its early part's where that is shorter: a slow tail (creep, a slow valve
     # stage) fits as a long lag, but the loop's crossover meets the fast part, whose gain per second
     # is larger than the fit's g / tau (a design on the fit's lag runs the loop faster than it can go)
-    tau = float(np.median([min(s.tau_s, s.tau_early_s) if math.isfinite(s.tau_early_s) else s.tau_s
-                           for s in m.steps]))
+    lags = [min(s.tau_s, s.tau_early_s) if math.isfinite(s.tau_early_s) else s.tau_s for s in m.steps]
+    tau = float(np.median(lags))
     tau_fit = float(np.median([s.tau_s for s in m.steps]))
+    # the gain the law's loop is shaped on: the median of the steps' slopes g / tau (what its
+    # crossover meets), times the median lag. The median gain over the median lag would pair one
+    # step's gain with another's lag: where the steps into the dead band pull the median gain down
+    # and the moving steps' lags are long, a loop faster than the moving steps allow
+    slope = float(np.median([abs(s.gain_cm_per_kpa) / lag for s, lag in zip(m.steps, lags)]))   # cm/kPa/s
+    loop_gain = slope * tau * m.kpa_per_u                                                        # cm per input unit
     theta_fit = float(np.median([s.theta_s for s in m.steps]))
     # the fit's dead time, but never less than the steps' first movement: a response whose slow
     # tail (creep, a slow valve stage) dominates fits as a long lag with no dead time, though the
@@ -414,7 +422,7 @@ def derive(m: Measured, task: Task) -> Derivation:
     theta = max(theta_fit, theta_move)
     theta_eff = theta + m.period_s             # one sample of the loop's own delay
     for k in TAU_C_PER_THETA:       # the tightest first; the last is the most robust
-        shape = _shape(gain, tau, theta_eff, k)
+        shape = _shape(loop_gain, tau, theta_eff, k)
         if shape.margins["phase_margin_deg"] >= PM_MIN_DEG and shape.margins["gain_margin"] >= GM_MIN:
             break
     else:
@@ -423,7 +431,7 @@ def derive(m: Measured, task: Task) -> Derivation:
     tau_c, kc, tau_i, ki, r, k_p, k_v, margins = (shape.tau_c, shape.kc, shape.tau_i, shape.ki, FF_PER_KP,
                                                  shape.k_p, shape.k_v, shape.margins)
     fc_hz = _observer_hz(shape, theta_eff, m.period_s)
-    with_observer = law_margins(k_v, k_p, r * k_p, fc_hz, gain, tau, theta_eff)   # the loop with it
+    with_observer = law_margins(k_v, k_p, r * k_p, fc_hz, loop_gain, tau, theta_eff)   # the loop with it
     a = 2.0 * task.w1_cm * k_p / math.pi
     w2 = W2_PER_A * a
     c = 2.0 * w2 * w2 * k_v / math.pi
@@ -491,7 +499,8 @@ def derive(m: Measured, task: Task) -> Derivation:
         "safety.x_min_cm": task.x_min_cm,
         "safety.x_max_cm": task.x_max_cm,
     }
-    figures = {"gain_cm_per_u": gain, "tau_s": tau, "tau_fit_s": tau_fit, "theta_s": theta, "theta_fit_s": theta_fit,
+    figures = {"gain_cm_per_u": gain, "loop_gain_cm_per_u": loop_gain, "tau_s": tau, "tau_fit_s": tau_fit,
+               "theta_s": theta, "theta_fit_s": theta_fit,
                "theta_first_move_s": theta_move, "theta_eff_s": theta_eff, "tau_c_s": tau_c,
                "noise_cm": m.noise_cm, "stroke_min_cm": lo, "stroke_max_cm": hi, "hysteresis_kpa_at_p0": hold_hyst,
                "hysteresis_kpa_over_ref": hyst_kpa,
