@@ -112,6 +112,8 @@ void pma_ctrl_monitor(pma_ctrl_t *s, float t_s, int outside_w1, uint32_t law_fla
     const uint8_t barrier = (law_flags & (PMA_PPC_FLAG_BARRIER1 | PMA_PPC_FLAG_BARRIER2)) != 0;
     const int widened = (law_flags & (PMA_PPC_FLAG_WIDEN1 | PMA_PPC_FLAG_WIDEN2)) != 0;
     s->barrier_run = barrier ? s->barrier_run + 1u : 0u;
+    const uint8_t sat = (uint8_t)(law_flags & PMA_CTRL_SAT_FLAGS);
+    s->widen1_held &= sat;
     const int clamp_run = s->barrier_ticks != 0 && s->barrier_run >= s->barrier_ticks;
     if (!outside_w1 && !clamp_run && !widened) return;
     if (!s->lost) s->lost_at_s = t_s;
@@ -121,10 +123,17 @@ void pma_ctrl_monitor(pma_ctrl_t *s, float t_s, int outside_w1, uint32_t law_fla
     if (s->fallback_mode == PMA_PPC_FALLBACK_WIDEN) {
         /* WIDEN: one widening of the position funnel is a transient the law recovers from; a
          * second within t_u of the last (or a lasting clamp) is a task the law cannot hold
-         * here, and MFAC takes over (docs/controllers.md, "When the guarantee is lost") */
+         * here, and MFAC takes over (docs/controllers.md, "When the guarantee is lost").
+         * Unless the law's input stays at its limit through both widenings (at the limit it
+         * was at the last one, even with the widened funnel's lower gain, or held there on
+         * every tick since): the reference lies beyond what that limit gives (out of the
+         * stroke, a load the pressure cannot hold), MFAC would be held there too, and the law
+         * tracks the rest better */
         if (law_flags & PMA_PPC_FLAG_WIDEN1) {
-            if (s->widen1_count != 0 && t_s - s->widen1_at_s < s->t_u_s) hand_over = 1;
+            const int held = s->widen1_held != 0 || (sat != 0 && sat == s->widen1_sat);
+            if (s->widen1_count != 0 && t_s - s->widen1_at_s < s->t_u_s && !held) hand_over = 1;
             s->widen1_at_s = t_s;
+            s->widen1_sat = s->widen1_held = sat;
             if (s->widen1_count != UINT32_MAX) ++s->widen1_count;
         }
         if (clamp_run) hand_over = 1;

@@ -20,6 +20,8 @@
  * travel in TELEM_E CtrlFlags. */
 #define PMA_CTRL_FLAG_GUARANTEE_LOST 0x4000u /* PPC: the guarantee was lost since START (latched) */
 #define PMA_CTRL_FLAG_FALLBACK       0x8000u /* PPC: MFAC is in charge (ppc.fallback MFAC or WIDEN) */
+/* the law's input-limit flags (pma/ppc.h), which the guarantee monitor follows */
+#define PMA_CTRL_SAT_FLAGS (PMA_PPC_FLAG_SAT_HIGH | PMA_PPC_FLAG_SAT_LOW)
 
 typedef struct pma_ctrl_out {
     float t_s;              /* control time since START */
@@ -88,6 +90,8 @@ typedef struct pma_ctrl {
     uint8_t fallback_mode;  /* ppc.fallback: PMA_PPC_FALLBACK_NONE, _MFAC, _WIDEN */
     uint8_t lost;           /* the guarantee was lost since START (latched) */
     uint8_t fallback_active;/* MFAC is in charge (from the first lost tick until STOP) */
+    uint8_t widen1_sat;     /* WIDEN: the law's SAT_HIGH / SAT_LOW flag at the last widening */
+    uint8_t widen1_held;    /* WIDEN: that flag while every tick since has had it, else 0 */
     float w1_cm, t_u_s;     /* the monitor's bound and the time it starts [cm, s] */
     uint32_t barrier_ticks; /* safety.barrier_ticks: a clamp run this long is lost (0: never) */
     uint32_t barrier_run;   /* consecutive ticks with a barrier clamp */

@@ -11,7 +11,7 @@
 /* 1,192 bytes (x86-64) with the PPC's fallback MFAC beside the law, its funnel widening and
  * the reference feedforward's play operator (controller.h); the Q16.16 slot adds its
  * fixed-point copies of the signals and limits and the fixed-point output stage with the
- * parameters it was built from (output_q16.h: 1,368 bytes) */
+ * parameters it was built from (output_q16.h: 1,376 bytes) */
 #if PMA_CTRL_Q16
 _Static_assert(sizeof(pma_app_t) <= 1376u, "pma_app_t must stay small (Cortex-M0: 16 KB RAM)");
 #else

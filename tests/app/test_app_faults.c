@@ -442,20 +442,22 @@ static void test_barrier_hands_over_to_mfac(void)
 /* The same task with the default ppc.fallback 2 (WIDEN): the law never clamps its position
  * funnel and its velocity funnel's clamp only for less than safety.barrier_ticks in a row;
  * instead it widens the funnel (flags WIDEN1/2, then WIDE), which is the first lost tick
- * (flagged, counted, its time kept); no BARRIER fault. The muscle does not move, so the
- * position funnel, shrinking back, meets the error again within t_u: that second widening
- * hands the loop to MFAC, bumplessly. */
+ * (flagged, counted, its time kept); no BARRIER fault. The muscle jumps between both sides of
+ * the reference, so the position funnel, shrinking back, meets the error again within t_u with
+ * the input no longer at the limit it held: that second widening hands the loop to MFAC,
+ * bumplessly. */
 static void test_widening_instead_of_the_clamp(void)
 {
     to_running(0);
     TEST_ASSERT_EQUAL_INT(PMA_PPC_FALLBACK_WIDEN, app.params.ppc_fallback);
-    pma_fake_adc_set(counts_at(-0.2f)); /* e = 1.3 cm >> w1 = 0.2 cm, inside the band */
     const uint32_t widen_flags = PMA_PPC_FLAG_WIDEN1 | PMA_PPC_FLAG_WIDEN2;
     uint32_t t = 0, widen1 = 0, handover_tick = 0, first_lost_tick = 0, run2 = 0;
     float first_lost_t_s = 0.0f, widen1_t_s = 0.0f;
     const float t_u_s = app.params.ppc_t_u_s;
     while (t < 3000) {
         if (t % 100 == 0) send_host_heartbeat((uint8_t)t);
+        /* e = +-1.3 cm >> w1 = 0.2 cm, inside the band, the side changing every 0.4 s */
+        pma_fake_adc_set(counts_at((t / 400u) % 2u ? -2.8f : -0.2f));
         const float u_before = app.output.u;
         step();
         ++t;
@@ -481,11 +483,12 @@ static void test_widening_instead_of_the_clamp(void)
         }
         TEST_ASSERT_TRUE(app.ctrl.lost && (o->flags & PMA_CTRL_FLAG_GUARANTEE_LOST));
         if (app.ctrl.fallback_active) {
-            /* the second widening of the position funnel within t_u of the first (the
-             * law's flags: the tick's own are MFAC's from now on) */
+            /* a widening of the position funnel within t_u of the last, after the muscle
+             * changed sides (the law's flags: the tick's own are MFAC's from now on) */
             TEST_ASSERT_TRUE(app.ctrl.c.ppc.out.flags & PMA_PPC_FLAG_WIDEN1);
             TEST_ASSERT_TRUE(o->flags & PMA_CTRL_FLAG_FALLBACK);
-            TEST_ASSERT_EQUAL_INT(1u, widen1);
+            TEST_ASSERT_GREATER_OR_EQUAL(1u, widen1);
+            TEST_ASSERT_GREATER_OR_EQUAL(400u, t);
             TEST_ASSERT_TRUE(o->t_s - widen1_t_s < t_u_s);
             TEST_ASSERT_FLOAT_WITHIN((float)CTRL_LSB, u_before, CTRL_F32(app.ctrl.shadow.u2));
             handover_tick = t;
@@ -505,6 +508,48 @@ static void test_widening_instead_of_the_clamp(void)
     const struct pma_proto_heartbeat_t h = next_heartbeat();
     TEST_ASSERT_TRUE(h.flags & PMA_HB_GUARANTEE_LOST);
     TEST_ASSERT_TRUE(h.flags & PMA_HB_FALLBACK);
+    TEST_ASSERT_EQUAL_INT(PMA_FAULT_NONE, h.fault_code);
+}
+
+/* A stuck muscle with an input range far too small to reach the reference (ctrl.u_min, u_max
+ * +-0.001 input units): the law's input stays at one limit, even with the lower gain of its
+ * widened funnel, and the funnel, shrinking back, widens again and again within t_u. That is a
+ * reference beyond what the input gives, where MFAC would be held at the limit too: the law
+ * stays in charge (no hand-over, no fault), the loss flagged and counted. */
+static void test_widening_at_a_held_input_limit_keeps_the_law(void)
+{
+    to_armed(0);
+    set_f32(PMA_PARAM_CTRL_U_MIN, -0.001f);
+    set_f32(PMA_PARAM_CTRL_U_MAX, 0.001f);
+    set_f32(PMA_PARAM_PPC_FF_INIT, 0.0f);
+    command_ok(PMA_CMD_START, 0, PMA_OK);
+    pma_fake_adc_set(counts_at(-0.2f)); /* e = 1.3 cm >> w1 = 0.2 cm, inside the band */
+    const float t_u_s = app.params.ppc_t_u_s;
+    uint32_t widen1 = 0, close_widenings = 0, sat = 0;
+    float last_widen_s = -1.0f;
+    for (uint32_t t = 0; t < 3000; ++t) {
+        if (t % 100 == 0) send_host_heartbeat((uint8_t)t);
+        step();
+        assert_state(app.state, PMA_STATE_RUNNING);
+        const pma_ctrl_out_t *o = pma_ctrl_out(&app.ctrl);
+        TEST_ASSERT_FALSE(app.ctrl.fallback_active || (o->flags & PMA_CTRL_FLAG_FALLBACK));
+        const uint32_t law = app.ctrl.c.ppc.out.flags;
+        if (law & PMA_PPC_FLAG_WIDEN1) {
+            /* every widening at the same limit */
+            if (widen1 == 0) sat = law & PMA_CTRL_SAT_FLAGS;
+            TEST_ASSERT_EQUAL_HEX32(sat, law & PMA_CTRL_SAT_FLAGS);
+            if (last_widen_s >= 0.0f && o->t_s - last_widen_s < t_u_s) ++close_widenings;
+            last_widen_s = o->t_s;
+            ++widen1;
+        }
+    }
+    TEST_ASSERT_NOT_EQUAL(0u, sat);                    /* at a limit */
+    TEST_ASSERT_GREATER_OR_EQUAL(2u, close_widenings); /* each a hand-over from anywhere else */
+    TEST_ASSERT_TRUE(app.ctrl.lost);
+    TEST_ASSERT_GREATER_THAN(0u, status_value(PMA_STATUS_GUARANTEE_LOST_TICKS));
+    const struct pma_proto_heartbeat_t h = next_heartbeat();
+    TEST_ASSERT_TRUE(h.flags & PMA_HB_GUARANTEE_LOST);
+    TEST_ASSERT_FALSE(h.flags & PMA_HB_FALLBACK);
     TEST_ASSERT_EQUAL_INT(PMA_FAULT_NONE, h.fault_code);
 }
 
@@ -779,6 +824,7 @@ int main(void)
     RUN_TEST(test_barrier);
     RUN_TEST(test_barrier_hands_over_to_mfac);
     RUN_TEST(test_widening_instead_of_the_clamp);
+    RUN_TEST(test_widening_at_a_held_input_limit_keeps_the_law);
     RUN_TEST(test_dac_failure);
     RUN_TEST(test_bus_off);
     RUN_TEST(test_bridge_fault_frame);
