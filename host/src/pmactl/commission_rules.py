@@ -149,7 +149,8 @@ def fit_step(t_s: np.ndarray, x_cm: np.ndarray, p_kpa: float, dp_kpa: float,
         moved = np.nonzero(np.abs(x - x0) >= MOVE_SIGMAS * noise_cm)[0]
         first_move = float(t[moved[0]]) if len(moved) else math.nan
         # on the smoothed response, where FIT_EARLY of a step of MOVED_SIGMAS stands clear of the noise
-        # (a noise crossing before the movement makes the early lag longer: then the fit's stands)
+        # (a noise crossing before the movement makes the early lag longer: then the fit's stands);
+        # the last EARLY_SMOOTH // 2 samples are dropped: "same" averages zeros in beyond the record
         smooth = np.convolve(y, np.ones(EARLY_SMOOTH) / EARLY_SMOOTH, mode="same")[: len(y) - EARLY_SMOOTH // 2]
         t_early, t_low_s = _first_crossing(t, smooth, FIT_EARLY), _first_crossing(t, smooth, FIT_LOW)
         tau_early = max(t_low_s - t_early, 0.0) / math.log((1.0 - FIT_EARLY) / (1.0 - FIT_LOW))
