@@ -126,6 +126,39 @@ int pma_app_core_init_finish(pma_app_t *app, int rc)
 
 /* ----------------------------------------------------------------- commands -- */
 
+/* u = 0 (and its Q16.16 copy) */
+static void zero_output_u(pma_app_t *app)
+{
+    app->output.u = 0.0f;
+#if PMA_CTRL_Q16
+    app->output.u_q16 = 0;
+#endif
+}
+
+static uint32_t ms_to_ticks(uint32_t ms, uint32_t tick_hz)
+{
+    if (ms == 0) return 0;
+    uint64_t t = ((uint64_t)ms * tick_hz + 999u) / 1000u;
+    return t == 0 ? 1u : (t > UINT32_MAX ? UINT32_MAX : (uint32_t)t);
+}
+
+/* The supervisor's limits from the safety.* parameters. Built at ARM and kept while the output
+ * is active, the only time the supervisor reads them: the parameters they come from (and
+ * sys.tick_hz) are idle-only, so they cannot change meanwhile, and a tick neither recomputes
+ * the envelope in software float nor divides in 64 bits on a core without an FPU or divider. */
+static void supervisor_limits(const pma_app_t *app, pma_supervisor_limits_t *lim)
+{
+    const pma_params_t *p = &app->params;
+    *lim = (pma_supervisor_limits_t){
+        .x_lo_cm = p->safety_x_min_cm - p->safety_x_margin_cm,
+        .x_hi_cm = p->safety_x_max_cm + p->safety_x_margin_cm,
+        .sensor_timeout_ticks = p->safety_sensor_timeout_ticks,
+        .max_late_ticks = p->safety_max_late_ticks,
+        .host_timeout_ticks = ms_to_ticks(p->safety_host_timeout_ms, p->sys_tick_hz),
+        .barrier_ticks = p->safety_barrier_ticks,
+    };
+}
+
 static int cmd_arm(pma_app_t *app)
 {
     switch (app->state) {
@@ -145,13 +178,15 @@ static int cmd_arm(pma_app_t *app)
          * sensor fault (its code) */
         return app->sensor.status == PMA_ERR_NOT_READY ? PMA_ERR_NOT_READY : app->sensor.status;
     }
-    const pma_params_t *p = &app->params;
-    if (!(app->sensor.x_cm >= p->safety_x_min_cm - p->safety_x_margin_cm &&
-          app->sensor.x_cm <= p->safety_x_max_cm + p->safety_x_margin_cm)) {
-        return PMA_ERR_RANGE;
-    }
+    pma_supervisor_limits_t lim;
+    supervisor_limits(app, &lim);
+    if (!(app->sensor.x_cm >= lim.x_lo_cm && app->sensor.x_cm <= lim.x_hi_cm)) return PMA_ERR_RANGE;
+    app->limits = lim;
+#if PMA_CTRL_Q16
+    pma_app_io_q16_arm(app);
+#endif
     app->state = PMA_STATE_ARMED;
-    app->output.u = 0.0f;
+    zero_output_u(app);
     return PMA_OK;
 }
 
@@ -163,6 +198,9 @@ static int cmd_start(pma_app_t *app)
     if (rc == PMA_OK) rc = pma_ctrl_start(&app->ctrl, &app->params, app->timing.period_s);
     if (rc != PMA_OK) return rc;
     app->timing.run_ticks = 0;
+#if PMA_CTRL_Q16
+    pma_clock_q16_start(&app->timing.clock, app->params.sys_tick_hz);   /* idle-only: fixed while RUNNING */
+#endif
     app->timing.ticks_since_host_heartbeat = 0;
     app->telem_count = 0;
     app->state = PMA_STATE_RUNNING;
@@ -196,7 +234,7 @@ int pma_app_command(pma_app_t *app, uint8_t command, uint8_t arg)
     case PMA_CMD_STOP:
         if (app->state == PMA_STATE_RUNNING) {
             app->state = PMA_STATE_ARMED;
-            app->output.u = 0.0f;
+            zero_output_u(app);
             return PMA_OK;
         }
         return app->state == PMA_STATE_ARMED ? PMA_OK
@@ -228,29 +266,6 @@ int pma_app_command(pma_app_t *app, uint8_t command, uint8_t arg)
 
 /* --------------------------------------------------------------------- tick -- */
 
-static uint32_t ms_to_ticks(uint32_t ms, uint32_t tick_hz)
-{
-    if (ms == 0) return 0;
-    uint64_t t = ((uint64_t)ms * tick_hz + 999u) / 1000u;
-    return t == 0 ? 1u : (t > UINT32_MAX ? UINT32_MAX : (uint32_t)t);
-}
-
-/* safety.host_timeout_ms in ticks, worked out again only when it or sys.tick_hz changed (a
- * 64-bit division costs a core without a divider a few hundred instructions a tick) */
-static uint32_t host_timeout_ticks(pma_app_t *app)
-{
-    pma_app_timing_t *t = &app->timing;
-    const pma_params_t *p = &app->params;
-    if (!t->host_timeout_valid || t->host_timeout_ms != p->safety_host_timeout_ms ||
-        t->host_timeout_hz != p->sys_tick_hz) {
-        t->host_timeout_ms = p->safety_host_timeout_ms;
-        t->host_timeout_hz = p->sys_tick_hz;
-        t->host_timeout_ticks = ms_to_ticks(p->safety_host_timeout_ms, p->sys_tick_hz);
-        t->host_timeout_valid = 1;
-    }
-    return t->host_timeout_ticks;
-}
-
 void pma_app_core_tick(pma_app_t *app, uint32_t late_ticks)
 {
     pma_app_sync_bridge(app);
@@ -262,32 +277,31 @@ void pma_app_core_tick(pma_app_t *app, uint32_t late_ticks)
     if (app->state == PMA_STATE_RUNNING) {
         if (app->timing.ticks_since_host_heartbeat != UINT32_MAX) ++app->timing.ticks_since_host_heartbeat;
         if (app->sensor.status == PMA_OK) {
+            float u = 0.0f;
+#if PMA_CTRL_Q16
+            ctrl_error = (uint8_t)(pma_ctrl_step_q16(&app->ctrl, app->timing.clock.t_s, app->sensor.x_q16,
+                                                     app->params.ctrl_openloop_u, &app->output.u_q16,
+                                                     &u) != PMA_OK);
+            pma_clock_q16_advance(&app->timing.clock);
+#else
             /* the same float either way; the 32-bit conversion is one instruction with an FPU
              * and a short call without, the 64-bit one a long call (49.7 days at 1 kHz) */
             const uint64_t k = app->timing.run_ticks;
             const float ticks = k <= UINT32_MAX ? (float)(uint32_t)k : (float)k;
             const float t_s = ticks * app->timing.period_s;
-            float u = 0.0f;
             ctrl_error = (uint8_t)(pma_ctrl_step(&app->ctrl, t_s, app->sensor.x_cm,
                                                  app->params.ctrl_openloop_u, &u) != PMA_OK);
+#endif
             app->output.u = u;
             ++app->timing.run_ticks;
         }
     } else {
-        app->output.u = 0.0f;
+        zero_output_u(app);
     }
 
     pma_can_status_t cs;
     const uint8_t bus_off = (uint8_t)(pma_hal_can_status(&cs) == PMA_OK && cs.state == PMA_CAN_BUS_OFF);
     const pma_params_t *p = &app->params;
-    const pma_supervisor_limits_t lim = {
-        .x_min_cm = p->safety_x_min_cm, .x_max_cm = p->safety_x_max_cm,
-        .x_margin_cm = p->safety_x_margin_cm,
-        .sensor_timeout_ticks = p->safety_sensor_timeout_ticks,
-        .max_late_ticks = p->safety_max_late_ticks,
-        .host_timeout_ticks = host_timeout_ticks(app),
-        .barrier_ticks = p->safety_barrier_ticks,
-    };
     const pma_supervisor_input_t in = {
         .output_active = (uint8_t)pma_app_output_active(app),
         .running = (uint8_t)(app->state == PMA_STATE_RUNNING),
@@ -303,7 +317,7 @@ void pma_app_core_tick(pma_app_t *app, uint32_t late_ticks)
          * the same tick, and WIDEN keeps the law in charge (docs/controllers.md) */
         .barrier_run = app->ctrl.fallback_mode == PMA_PPC_FALLBACK_NONE ? app->ctrl.barrier_run : 0u,
     };
-    const pma_fault_t f = pma_supervisor_check(&lim, &in);
+    const pma_fault_t f = pma_supervisor_check(&app->limits, &in);
     if (f != PMA_FAULT_NONE) pma_app_raise_fault(app, f); /* safe output below, this tick */
 
     pma_app_write_output(app);

@@ -30,8 +30,9 @@
 
 #include <stdint.h>
 
+#include "clock_q16.h"
 #include "controller.h"
-#include "output_q16.h"
+#include "io_q16.h"
 #include "params.h"
 #include "pma/hal.h"
 #include "pstore.h"
@@ -208,15 +209,30 @@ typedef struct pma_app_timing {
     uint64_t next_recover_us;      /* bus-off: next recovery request */
     uint8_t heartbeat_counter;
     uint8_t tick_started;          /* the port's tick runs at period_us */
-    uint8_t host_timeout_valid;    /* host_timeout_ticks is safety.host_timeout_ms at host_timeout_hz */
-    uint32_t host_timeout_ms, host_timeout_hz, host_timeout_ticks;
+#if PMA_CTRL_Q16
+    pma_clock_q16_t clock;         /* the control time run_ticks / sys.tick_hz, Q16.16 [s] */
+#endif
 } pma_app_timing_t;
 
 /* This tick's position sample, from the ADC or the plant bridge. */
+#define PMA_APP_INPUT_KEY_WORDS 5u
+/* The fixed-point input stage (io_q16.h) of the Q16.16 builds, built from the parameters in
+ * `key` (their bits) while the output is inactive, kept while it is active (adc.* are
+ * idle-only); ok: it represents them (else the float function runs). */
+typedef struct pma_app_input_q16 {
+    pma_input_q16_t stage;
+    uint32_t key[PMA_APP_INPUT_KEY_WORDS];
+    uint8_t built, ok;
+} pma_app_input_q16_t;
+
 typedef struct pma_app_sensor {
     uint16_t raw_counts;
     int status;                    /* PMA_OK or the conversion's error */
     float x_cm;
+#if PMA_CTRL_Q16
+    pma_q16_t x_q16;               /* x_cm in Q16.16: the controller slot's input */
+    pma_app_input_q16_t q16;
+#endif
     uint8_t sample_status;         /* pma_sample_status_t: how this tick's sample came */
     uint32_t ticks_since_sample;   /* since the last new sample (saturates at UINT32_MAX) */
 } pma_app_sensor_t;
@@ -231,18 +247,22 @@ typedef struct pma_app_bridge {
     uint16_t raw_counts;           /* the last frame's sensor counts */
 } pma_app_bridge_t;
 
-/* The fixed-point output stage (output_q16.h) of the Q16.16 builds, built from the
- * parameters in `key` (their bits); ok: it represents them (else the float functions run). */
-#define PMA_APP_OUTPUT_KEY_WORDS 13u
+/* The fixed-point output stage (io_q16.h) of the Q16.16 builds, built at the first active tick
+ * after ARM (its parameters are idle-only); ok: it represents them (else the float functions
+ * run). */
 typedef struct pma_app_output_q16 {
     pma_output_q16_t stage;
-    uint32_t key[PMA_APP_OUTPUT_KEY_WORDS];
-    uint8_t built, ok;
+    pma_q16_t p_kpa;               /* p_kpa as the stage wrote it, where p_valid */
+    uint8_t built, ok, p_valid;
 } pma_app_output_q16_t;
 
 /* What the actuator is driven with. */
 typedef struct pma_app_output {
     float u;                       /* the controller's output (its own units: kPa about p0) */
+#if PMA_CTRL_Q16
+    pma_q16_t u_q16;               /* u in Q16.16, the slot's own number (always u's value) */
+#endif
+
     float p_kpa;                   /* the pressure command */
     uint16_t dac_counts;           /* and its DAC code */
 #if PMA_CTRL_Q16
@@ -268,6 +288,7 @@ typedef struct pma_app {
     uint8_t last_rule;             /* PMA_RULE_* of the last refusal by a rule */
     pma_app_storage_t storage;
     pma_app_timing_t timing;
+    pma_supervisor_limits_t limits;  /* the supervisor's, built at ARM (app.c supervisor_limits) */
     pma_app_sensor_t sensor;
     pma_app_bridge_t bridge;
     pma_ctrl_t ctrl;

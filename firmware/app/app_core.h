@@ -35,6 +35,9 @@ int pma_app_apply_timing(pma_app_t *app);
 void pma_app_sync_bridge(pma_app_t *app);
 void pma_app_acquire(pma_app_t *app);       /* this tick's position into app->sensor */
 void pma_app_write_output(pma_app_t *app);  /* app->output.u to the DAC or the bridge */
+#if PMA_CTRL_Q16
+void pma_app_io_q16_arm(pma_app_t *app);    /* ARM: the fixed-point stages built anew */
+#endif
 
 /* pma_app_init() in two parts around the BOOT heartbeat, which the step sends
  * between them: core_init clears *app, loads the parameters and sets the CAN

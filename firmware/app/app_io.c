@@ -27,6 +27,83 @@ void pma_app_sync_bridge(pma_app_t *app)
     app->sensor.status = PMA_ERR_NOT_READY;
 }
 
+#if PMA_CTRL_Q16
+/* Whether key[0..n) equals the stage's stored key (then 1), else stores it (0): a stage is
+ * rebuilt when one of the values it is built from changed (their bits compared: a few
+ * instructions a tick, and no path that changes a parameter can miss it). */
+static int same_key(uint32_t *stored, uint8_t *built, const uint32_t *key, unsigned n)
+{
+    int same = *built;
+    for (unsigned i = 0; same && i < n; ++i) same = key[i] == stored[i];
+    if (!same) {
+        memcpy(stored, key, n * sizeof key[0]);
+        *built = 1;
+    }
+    return same;
+}
+
+/* ARM: the fixed-point stages are built again at the first active tick; from then on, while
+ * the output is active, they are used as built (their parameters, adc.*, act.*, dac.*,
+ * safety.safe_* and sys.tick_hz, are idle-only: SET refuses them then). */
+void pma_app_io_q16_arm(pma_app_t *app)
+{
+    app->sensor.q16.built = 0;
+    app->output.q16.built = 0;
+}
+
+/* The fixed-point input stage of the parameters as they are; NULL where it cannot represent
+ * them (the float function then runs, and reports an invalid scaling). */
+static const pma_input_q16_t *input_q16(pma_app_t *app)
+{
+    pma_app_input_q16_t *c = &app->sensor.q16;
+    if (c->built && pma_app_output_active(app)) return c->ok ? &c->stage : NULL;
+    const pma_params_t *p = &app->params;
+    const float f[] = {p->adc_offset_cm, p->adc_gain_cm_per_count};
+    enum { NF = sizeof f / sizeof f[0] };   /* then three integer parameters */
+    _Static_assert(NF + 3u == PMA_APP_INPUT_KEY_WORDS, "the key holds exactly the values the stage is built from");
+    uint32_t key[PMA_APP_INPUT_KEY_WORDS];
+    memcpy(key, f, sizeof f);
+    key[NF] = p->adc_raw_min_counts;
+    key[NF + 1] = p->adc_raw_max_counts;
+    key[NF + 2] = p->adc_wire_break_below_counts;
+    if (!same_key(c->key, &c->built, key, PMA_APP_INPUT_KEY_WORDS)) {
+        pma_adc_scaling_t s;
+        pma_app_adc_scaling(p, &s);
+        c->ok = (uint8_t)(pma_input_q16_build(&c->stage, &s) == PMA_OK);
+    }
+    return c->ok ? &c->stage : NULL;
+}
+#endif
+
+/* The position of this tick's sample in cm: in Q16.16 builds the fixed-point stage where it
+ * takes the scaling (and x_cm from it), else the float function, which defines it. */
+static int scale_sample(pma_app_t *app)
+{
+#if PMA_CTRL_Q16
+    const pma_input_q16_t *in = input_q16(app);
+    if (in != NULL) {
+        pma_q16_t x = 0;
+        const int rc = pma_input_q16_cm(in, app->sensor.raw_counts, &x);
+        if (rc == PMA_OK) {
+            app->sensor.x_q16 = x;
+            app->sensor.x_cm = pma_q16_to_f32(x);
+        }
+        return rc;
+    }
+#endif
+    pma_adc_scaling_t s;
+    pma_app_adc_scaling(&app->params, &s);
+    float x = 0.0f;
+    const int rc = pma_adc_counts_to_cm(&s, app->sensor.raw_counts, &x);
+    if (rc == PMA_OK) {
+        app->sensor.x_cm = x;
+#if PMA_CTRL_Q16
+        app->sensor.x_q16 = pma_q16_from_f32(x);   /* saturated: the slot's range */
+#endif
+    }
+    return rc;
+}
+
 /* The position of this tick: from the ADC, or the plant bridge's last sample. */
 void pma_app_acquire(pma_app_t *app)
 {
@@ -53,44 +130,22 @@ void pma_app_acquire(pma_app_t *app)
         app->sensor.ticks_since_sample = 0;
         rc = pma_hal_adc_read(&app->sensor.raw_counts);
     }
-    if (rc == PMA_OK) {
-        pma_adc_scaling_t s;
-        pma_app_adc_scaling(&app->params, &s);
-        float x = 0.0f;
-        rc = pma_adc_counts_to_cm(&s, app->sensor.raw_counts, &x);
-        if (rc == PMA_OK) app->sensor.x_cm = x;
-    }
+    if (rc == PMA_OK) rc = scale_sample(app);
     app->sensor.status = rc;
 }
 
 #if PMA_CTRL_Q16
-/* The fixed-point output stage of the parameters as they are, rebuilt when one of the
- * values it is built from changed (their bits compared: a few instructions a tick, and no
- * path that changes a parameter can miss it); NULL where it cannot represent them. */
+/* The fixed-point output stage, built at the first active tick after ARM; NULL where it
+ * cannot represent the parameters. */
 static const pma_output_q16_t *output_q16(pma_app_t *app)
 {
-    const pma_params_t *p = &app->params;
-    const float f[] = {p->act_p0_kpa, p->act_kpa_per_u, p->act_p_min_kpa, p->act_p_max_kpa,
-                       p->act_slew_kpa_s, p->safety_safe_kpa, p->dac_counts_at_zero_kpa,
-                       p->dac_counts_per_kpa, app->timing.period_s};
-    enum { NF = sizeof f / sizeof f[0] };   /* then four integer parameters */
-    _Static_assert(NF + 4u == PMA_APP_OUTPUT_KEY_WORDS, "the key holds exactly the values the stage is built from");
-    uint32_t key[PMA_APP_OUTPUT_KEY_WORDS];
-    memcpy(key, f, sizeof f);
-    key[NF] = (uint32_t)p->act_polarity;
-    key[NF + 1] = p->safety_safe_mode;
-    key[NF + 2] = p->dac_min_counts;
-    key[NF + 3] = p->dac_max_counts;
     pma_app_output_q16_t *c = &app->output.q16;
-    int same = c->built;
-    for (unsigned i = 0; same && i < PMA_APP_OUTPUT_KEY_WORDS; ++i) same = key[i] == c->key[i];
-    if (!same) {
+    if (!c->built) {
         pma_actuator_config_t ac;
         pma_dac_scaling_t ds;
-        pma_app_actuator_config(p, &ac);
-        pma_app_dac_scaling(p, &ds);
+        pma_app_actuator_config(&app->params, &ac);
+        pma_app_dac_scaling(&app->params, &ds);
         c->ok = (uint8_t)(pma_output_q16_build(&c->stage, &ac, &ds, app->timing.period_s) == PMA_OK);
-        memcpy(c->key, key, sizeof key);
         c->built = 1;
     }
     return c->ok ? &c->stage : NULL;
@@ -103,16 +158,22 @@ void pma_app_write_output(pma_app_t *app)
 #if PMA_CTRL_Q16
     /* an active output in fixed point where the stage takes the values; the float functions,
      * which define it, otherwise (and always in float builds) */
+    pma_app_output_q16_t *c = &app->output.q16;
     if (pma_app_output_active(app)) {
         const pma_output_q16_t *q = output_q16(app);
-        if (q != NULL && pma_output_q16_takes(app->output.u) && pma_output_q16_takes(app->output.p_kpa)) {
-            const pma_q16_t p = pma_output_q16_kpa(q, pma_q16_from_f32(app->output.u),
-                                                   pma_q16_from_f32(app->output.p_kpa));
+        /* p(k-1): as the stage wrote it, else the float value where the stage takes it */
+        const int p_ok = c->p_valid || pma_output_q16_takes(app->output.p_kpa);
+        if (q != NULL && p_ok) {
+            const pma_q16_t p_prev = c->p_valid ? c->p_kpa : pma_q16_from_f32(app->output.p_kpa);
+            const pma_q16_t p = pma_output_q16_kpa(q, app->output.u_q16, p_prev);
+            c->p_kpa = p;
+            c->p_valid = 1;
             app->output.p_kpa = pma_q16_to_f32(p);
             app->output.dac_counts = pma_output_q16_counts(q, p);
             written = 1;
         }
     }
+    if (!written) c->p_valid = 0;   /* the float functions write p below */
 #endif
     pma_actuator_config_t ac;
     pma_dac_scaling_t ds;
@@ -148,6 +209,9 @@ void pma_app_write_output(pma_app_t *app)
         pma_app_actuator_config(&app->params, &ac);
         pma_app_dac_scaling(&app->params, &ds);
         app->output.p_kpa = pma_actuator_safe_kpa(&ac, app->output.p_kpa);
+#if PMA_CTRL_Q16
+        app->output.q16.p_valid = 0;
+#endif
         uint16_t counts = 0;
         if (pma_dac_kpa_to_counts(&ds, app->output.p_kpa, &counts) != PMA_OK ||
             pma_hal_dac_write(counts) != PMA_OK) {

@@ -163,6 +163,16 @@ int pma_ctrl_start(pma_ctrl_t *s, const pma_params_t *p, float period_s);
  * ctrl.openloop_u. *u receives the output (0 on error). */
 int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float *u);
 
+#if PMA_CTRL_Q16
+/* The end of the Q16.16 slot's control time: 32767 s [Q16.16] (a step at or after it is refused) */
+#define PMA_CTRL_Q16_T_END ((pma_q16_t)32767 * PMA_Q16_ONE)
+/* The same step in the Q16.16 slot's numbers, as the application's tick calls it (no float
+ * conversion of its inputs): t [s] and x [cm] in Q16.16; the output both in Q16.16 (*u_q16)
+ * and in float (*u). pma_ctrl_step converts its float inputs (range checked) and calls it. */
+int pma_ctrl_step_q16(pma_ctrl_t *s, pma_q16_t t_s, pma_q16_t x_cm, float openloop_u, pma_q16_t *u_q16,
+                      float *u);
+#endif
+
 /* The PPC's guarantee monitor (mode PPC; t the control time since START, e = x - x_r with
  * the raw sample): a tick with t >= t_u and |e| >= w1, a tick on which the law widened a
  * funnel (ppc.fallback WIDEN: flags WIDEN1/2), or (at any t) the last of

@@ -113,12 +113,21 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
     if (s == NULL || u == NULL) return PMA_ERR_NULL;
     *u = 0.0f;
     if (!pma_isfinite_f32(t_s) || !pma_isfinite_f32(x_cm)) return PMA_ERR_NOT_FINITE;
+    if (!(t_s < 32767.0f)) return PMA_ERR_FIXED_RANGE;
+    pma_q16_t uq;
+    return pma_ctrl_step_q16(s, pma_q16_from_f32(t_s), pma_q16_from_f32(x_cm), openloop_u, &uq, u);
+}
+
+int pma_ctrl_step_q16(pma_ctrl_t *s, pma_q16_t t, pma_q16_t x, float openloop_u, pma_q16_t *u_q16,
+                      float *u)
+{
+    if (s == NULL || u == NULL || u_q16 == NULL) return PMA_ERR_NULL;
+    *u = 0.0f;
+    *u_q16 = 0;
     /* Q16.16 time ends at 32767 s (9.1 h): past it the step refuses, and the supervisor
      * faults CONTROLLER (the output goes safe), rather than the reference freezing */
-    if (!(t_s < 32767.0f)) return PMA_ERR_FIXED_RANGE;
+    if (t >= PMA_CTRL_Q16_T_END) return PMA_ERR_FIXED_RANGE;
     pma_ctrl_out_q16_t *o = &s->q_out;
-    const pma_q16_t t = pma_q16_from_f32(t_s);
-    const pma_q16_t x = pma_q16_from_f32(x_cm);
     o->t_s = t;
     s->out.flags = 0;
     s->out.barrier = 0;
@@ -160,7 +169,7 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
             o->internal2 = s->c.ppc.out.lambda2_cm_s;
             barrier = (uint8_t)((flags & (PMA_PPC_FLAG_BARRIER1 | PMA_PPC_FLAG_BARRIER2)) != 0);
         }
-        pma_ctrl_monitor(s, t_s, t >= s->q_t_u_s && q16_abs(o->e_cm) >= s->q_w1_cm, flags);
+        pma_ctrl_monitor(s, pma_q16_to_f32(t), t >= s->q_t_u_s && q16_abs(o->e_cm) >= s->q_w1_cm, flags);
         /* as controller_f32.c: the fallback's law once in charge, before that its estimator */
         if (s->fallback_active) {
             CHECK(pma_mfac_step_q16(&s->shadow, x, next_reference(s, t), &out));
@@ -192,6 +201,7 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
                              ? (openloop_u < s->u_min ? s->u_min : (openloop_u > s->u_max ? s->u_max : openloop_u))
                              : openloop_u;
         o->u = pma_q16_from_f32(ol);
+        *u_q16 = o->u;
         *u = ol;
         return PMA_OK;
     }
@@ -202,6 +212,7 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
     s->out.barrier = barrier;
     if (barrier && s->breaches != UINT32_MAX) ++s->breaches;
     o->u = out;
+    *u_q16 = out;
     *u = pma_q16_to_f32(out);
     return PMA_OK;
 }

@@ -23,8 +23,7 @@ pma_fault_t pma_supervisor_check(const pma_supervisor_limits_t *lim,
     default: return PMA_FAULT_SENSOR_READ;
     }
     /* written so that a NaN position also trips */
-    if (!(in->x_cm >= lim->x_min_cm - lim->x_margin_cm &&
-          in->x_cm <= lim->x_max_cm + lim->x_margin_cm)) {
+    if (!(in->x_cm >= lim->x_lo_cm && in->x_cm <= lim->x_hi_cm)) {
         return PMA_FAULT_POSITION_LIMIT;
     }
     if (in->late_ticks > lim->max_late_ticks) return PMA_FAULT_TICK_OVERRUN;

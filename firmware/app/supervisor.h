@@ -39,7 +39,8 @@ typedef enum pma_fault {
 } pma_fault_t;
 
 typedef struct pma_supervisor_limits {
-    float x_min_cm, x_max_cm, x_margin_cm;
+    float x_lo_cm, x_hi_cm;            /* the position envelope: safety.x_min_cm - x_margin_cm ..
+                                          safety.x_max_cm + x_margin_cm [cm] */
     uint32_t sensor_timeout_ticks;     /* >= 1 */
     uint32_t max_late_ticks;
     uint32_t host_timeout_ticks;       /* 0: disabled */

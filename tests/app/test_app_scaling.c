@@ -1,12 +1,14 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* ADC and DAC scaling (firmware/app/scaling.h): conversion, range and wire-break
- * checks, saturation, validation. */
+ * checks, saturation, validation; the Q16.16 builds' fixed-point stages against the float
+ * functions that define them (io_q16.h) and their control time (clock_q16.h). */
 #include <math.h>
 #include <stdint.h>
 
 #include "pma/status.h"
 #include "pma_test.h"
-#include "output_q16.h"
+#include "clock_q16.h"
+#include "io_q16.h"
 #include "scaling.h"
 
 /* The header's example: 4-20 mA over 165 ohm into a 12-bit 3.3 V ADC, 0-10 cm. */
@@ -249,6 +251,88 @@ static void test_output_q16_refuses(void)
     TEST_ASSERT_TRUE(pma_output_q16_takes(0.0f));
 }
 
+/* The fixed-point input stage against pma_adc_counts_to_cm on random scalings (12- and
+ * 16-bit converters, both mountings, positions up to a few metres): the same status for
+ * every class of counts, and x within one LSB (2^-16 cm) plus the float function's own
+ * rounding. */
+static void test_input_q16_matches_float(void)
+{
+    unsigned wire = 0, range = 0, valid = 0;
+    for (int n = 0; n < 2000; ++n) {
+        const double full = (n & 1) ? 4095.0 : 65535.0;
+        const uint16_t lo = (uint16_t)uniform(0.0, 0.3 * full), hi = (uint16_t)uniform(0.7 * full, full);
+        const pma_adc_scaling_t s = {
+            .offset_cm = (float)uniform(-300.0, 300.0),
+            .gain_cm_per_count = (float)((n & 2 ? 1 : -1) * exp(uniform(log(1e-5), log(0.1)))),
+            .raw_min_counts = lo, .raw_max_counts = hi,
+            .wire_break_below_counts = (n % 3 == 0) ? 0u : (uint16_t)uniform(0.0, lo)};
+        pma_input_q16_t q;
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_input_q16_build(&q, &s));
+        for (int k = 0; k < 50; ++k) {
+            const uint16_t c = (uint16_t)uniform(0.0, (k & 1) ? full + 1.0 : (double)lo + 2.0);
+            float xf = 123.0f;
+            pma_q16_t xq = 77;
+            const int rf = pma_adc_counts_to_cm(&s, c, &xf), rq = pma_input_q16_cm(&q, c, &xq);
+            TEST_ASSERT_EQUAL_INT(rf, rq);
+            if (rf != PMA_OK) {
+                TEST_ASSERT_EQUAL_INT(77, xq);   /* untouched on an error */
+                rf == PMA_ERR_WIRE_BREAK ? ++wire : ++range;
+                continue;
+            }
+            ++valid;
+            TEST_ASSERT_FLOAT_WITHIN(1.0f / 65536.0f + fabsf(xf) * 1.2e-7f, xf, pma_q16_to_f32(xq));
+        }
+    }
+    TEST_ASSERT_TRUE(wire > 1000 && range > 1000 && valid > 20000);
+}
+
+/* A scaling whose valid counts reach beyond Q16.16 is refused (the float function then
+ * runs); an invalid one keeps its validation code. */
+static void test_input_q16_refuses(void)
+{
+    pma_input_q16_t q;
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_input_q16_build(&q, &laser));
+    pma_adc_scaling_t s = laser;
+    s.gain_cm_per_count = 10.0f;              /* 40,940 cm at raw_max */
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_FIXED_RANGE, pma_input_q16_build(&q, &s));
+    s = laser;
+    s.offset_cm = -40000.0f;
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_FIXED_RANGE, pma_input_q16_build(&q, &s));
+    s.offset_cm = NAN;
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_NOT_FINITE, pma_input_q16_build(&q, &s));
+    s = laser;
+    s.gain_cm_per_count = 0.0f;
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_RANGE, pma_input_q16_build(&q, &s));
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_NULL, pma_input_q16_build(NULL, &laser));
+}
+
+/* The Q16.16 control time is k / hz rounded half up, exactly, at every tick rate the
+ * parameters allow and some beyond, and saturates instead of wrapping. */
+static void test_clock_q16_exact(void)
+{
+    static const uint32_t rates[] = {50u, 333u, 999u, 1000u, 1024u, 4999u, 5000u, 7u, 65536u};
+    for (unsigned i = 0; i < sizeof rates / sizeof rates[0]; ++i) {
+        const uint32_t hz = rates[i];
+        pma_clock_q16_t c;
+        pma_clock_q16_start(&c, hz);
+        for (uint64_t k = 0; k < 100000u; ++k) {
+            const uint64_t want = (k * 65536u + hz / 2u) / hz;
+            if ((uint64_t)c.t_s != want) {
+                TEST_FAIL_MESSAGE("control time differs from k / hz rounded");
+            }
+            pma_clock_q16_advance(&c);
+        }
+    }
+    pma_clock_q16_t c;
+    pma_clock_q16_start(&c, 1u);              /* one second a tick: 32,767 ticks to the end */
+    for (int k = 0; k < 32767; ++k) pma_clock_q16_advance(&c);
+    TEST_ASSERT_EQUAL_INT32((int32_t)32767 * 65536, c.t_s);
+    pma_clock_q16_advance(&c);
+    TEST_ASSERT_EQUAL_INT32(PMA_Q16_MAX, c.t_s);
+    pma_clock_q16_advance(&c);
+    TEST_ASSERT_EQUAL_INT32(PMA_Q16_MAX, c.t_s);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -260,5 +344,8 @@ int main(void)
     RUN_TEST(test_dac_validation);
     RUN_TEST(test_output_q16_matches_float);
     RUN_TEST(test_output_q16_refuses);
+    RUN_TEST(test_input_q16_matches_float);
+    RUN_TEST(test_input_q16_refuses);
+    RUN_TEST(test_clock_q16_exact);
     return UNITY_END();
 }

@@ -21,7 +21,7 @@ static pma_supervisor_input_t in;
 static void setup_supervisor(void)
 {
     lim = (pma_supervisor_limits_t){
-        .x_min_cm = -3.0f, .x_max_cm = 0.0f, .x_margin_cm = 0.5f, .sensor_timeout_ticks = 10,
+        .x_lo_cm = -3.5f, .x_hi_cm = 0.5f, .sensor_timeout_ticks = 10,
         .max_late_ticks = 2, .host_timeout_ticks = 500, .barrier_ticks = 100,
     };
     in = (pma_supervisor_input_t){

@@ -99,9 +99,11 @@ static void test_conversions_match_their_definitions(void)
     for (size_t i = 0; i < sizeof edges / sizeof edges[0]; ++i) {
         TEST_ASSERT_EQUAL_INT(from_f32_by_definition(edges[i]), pma_q16_from_f32(edges[i]));
     }
-    const pma_q16_t as[] = {0, 1, -1, 12345, -98765, PMA_Q16_MAX, PMA_Q16_MIN, PMA_Q16_ONE};
+    const pma_q16_t as[] = {0, 1, -1, 12345, -98765, PMA_Q16_MAX, PMA_Q16_MIN, PMA_Q16_ONE,
+                            16777217, 16777219, -16777219, 0x7FFFFFBF, 0x7FFFFF80, 0x7FFFFFC0};   /* ties, carries */
     for (size_t i = 0; i < sizeof as / sizeof as[0]; ++i) {
-        TEST_ASSERT_EQUAL_FLOAT((float)as[i] * (1.0f / 65536.0f), pma_q16_to_f32(as[i]));
+        const float want = (float)as[i] * (1.0f / 65536.0f), got = pma_q16_to_f32(as[i]);
+        TEST_ASSERT_EQUAL_MEMORY(&want, &got, sizeof want);   /* to the bit */
     }
     for (int i = 0; i < 4096; ++i) {
         s = s * 1664525u + 1013904223u;

@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* The active output stage in fixed point (output_q16.h). */
-#include "output_q16.h"
+/* The fixed-point input and output stages (io_q16.h). */
+#include "io_q16.h"
 
 #include <math.h>
 #include <stddef.h>
@@ -25,15 +25,33 @@ static int to_scale(float r, pma_scale_q_t *sc)
     return PMA_OK;
 }
 
-static int64_t apply(pma_scale_q_t sc, int32_t x)
-{
-    return pma_rshift_round(pma_mul32(sc.m, x), sc.s);
-}
 
 static int q16_of(float v, pma_q16_t *q)
 {
     if (!(v > -32767.0f && v < 32767.0f)) return PMA_ERR_FIXED_RANGE;
     *q = pma_q16_from_f32(v);
+    return PMA_OK;
+}
+
+int pma_input_q16_build(pma_input_q16_t *in, const pma_adc_scaling_t *s)
+{
+    if (in == NULL) return PMA_ERR_NULL;
+    const int rc = pma_adc_validate_scaling(s);
+    if (rc != PMA_OK) return rc;
+    /* the valid counts' positions (an affine map: its ends) must fit Q16.16, with the
+     * offset's and the product's rounding */
+    const float ends[] = {s->offset_cm + s->gain_cm_per_count * (float)s->raw_min_counts,
+                          s->offset_cm + s->gain_cm_per_count * (float)s->raw_max_counts, s->offset_cm};
+    for (unsigned i = 0; i < sizeof ends / sizeof ends[0]; ++i) {
+        if (!(fabsf(ends[i]) < 32767.0f)) return PMA_ERR_FIXED_RANGE;
+    }
+    pma_input_q16_t n;
+    if (to_scale(ldexpf(s->gain_cm_per_count, 16), &n.k) != PMA_OK) return PMA_ERR_FIXED_RANGE;
+    n.x0 = pma_q16_from_f32(s->offset_cm);
+    n.wire_break_below_counts = s->wire_break_below_counts;
+    n.raw_min_counts = s->raw_min_counts;
+    n.raw_max_counts = s->raw_max_counts;
+    *in = n;
     return PMA_OK;
 }
 
@@ -70,7 +88,7 @@ int pma_output_q16_build(pma_output_q16_t *o, const pma_actuator_config_t *ac,
 
 pma_q16_t pma_output_q16_kpa(const pma_output_q16_t *o, pma_q16_t u, pma_q16_t p_prev_kpa)
 {
-    pma_q16_t p = pma_q16_sat64((int64_t)o->p0 + apply(o->k, u));
+    pma_q16_t p = pma_q16_sat64((int64_t)o->p0 + pma_scale_q_apply(o->k, u));
     p = pma_q16_clamp(p, o->p_min, o->p_max);
     if (o->step > 0) {
         /* within p_prev +- step, the float function's order (upper bound first) */
@@ -84,7 +102,7 @@ pma_q16_t pma_output_q16_kpa(const pma_output_q16_t *o, pma_q16_t u, pma_q16_t p
 
 uint16_t pma_output_q16_counts(const pma_output_q16_t *o, pma_q16_t p_kpa)
 {
-    const int64_t v = o->c0 + apply(o->cpk, p_kpa);                 /* Q16.16 counts */
+    const int64_t v = o->c0 + pma_scale_q_apply(o->cpk, p_kpa);                 /* Q16.16 counts */
     if (!(v > (int64_t)o->min_counts * 65536)) return o->min_counts;
     if (!(v < (int64_t)o->max_counts * 65536)) return o->max_counts;
     return (uint16_t)((v + 32768) >> 16);                           /* v > 0 here */

@@ -1,13 +1,23 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* The active output stage in fixed point: the actuator's law and the DAC
- * scaling of a tick (pma_actuator_active_kpa, then pma_dac_kpa_to_counts) in
- * integer arithmetic, for the Q16.16 builds (PMA_CTRL_Q16: cores without an
- * FPU, where those two float functions cost about 1,300 instructions a tick
- * in software float). The float functions stay the definition: this stage is
- * built from the same configurations and tested against them
- * (tests/app/test_output_q16.c).
+/* The fixed-point stages at the two ends of a tick, for the Q16.16 builds
+ * (PMA_CTRL_Q16: cores without an FPU, where the float functions they stand for
+ * cost about 300 (input) and 1,300 (output) instructions a tick in software
+ * float). The float functions stay the definition: each stage is built from
+ * the same configuration and tested against them (tests/app/test_app_scaling.c).
  *
- * Formats:
+ * Input: the sensor's counts to cm (pma_adc_counts_to_cm) in integers:
+ *   x       Q16.16 cm, offset_cm + gain_cm_per_count counts with the offset
+ *           and the product each rounded to Q16.16 (within one LSB, 2^-16 cm,
+ *           of the float function's value); the factor (the gain in Q16.16 cm
+ *           per count) a 30-bit mantissa and a shift (relative rounding below
+ *           2^-29);
+ *   the wire-break and range checks on the counts, as the float function.
+ * pma_input_q16_build() refuses (PMA_ERR_FIXED_RANGE) a scaling whose valid
+ * counts reach beyond Q16.16 (|x| >= 32767 cm at raw_min or raw_max); it
+ * returns the scaling's validation code as it is.
+ *
+ * Output: the actuator's law and the DAC scaling of a tick
+ * (pma_actuator_active_kpa, then pma_dac_kpa_to_counts), formats:
  *   u       Q16.16 in the controller's unit (the slot's range, |u| < 32768);
  *   p       Q16.16 kPa (the actuator's range is 0..1000 kPa: rounding 2^-17 kPa);
  *   counts  the DAC code, computed in Q16.16 counts in 64 bits, then rounded
@@ -23,20 +33,44 @@
  * tick) or any value outside Q16.16; the application then keeps the float
  * functions for that configuration. It returns the configurations'
  * validation codes as they are. */
-#ifndef PMA_OUTPUT_Q16_H
-#define PMA_OUTPUT_Q16_H
+#ifndef PMA_IO_Q16_H
+#define PMA_IO_Q16_H
 
 #include <stdint.h>
 #include <string.h>
 
 #include "actuator.h"
 #include "pma/fixed.h"
+#include "pma/status.h"
 #include "scaling.h"
 
 typedef struct pma_scale_q {   /* x m 2^-s */
     int32_t m;                 /* |m| < 2^30 */
     uint8_t s;                 /* 1..62 */
 } pma_scale_q_t;
+
+/* x m 2^-s rounded (ties away from zero); |x| < 2^31 */
+static inline int64_t pma_scale_q_apply(pma_scale_q_t sc, int32_t x)
+{
+    return pma_rshift_round(pma_mul32(sc.m, x), sc.s);
+}
+
+typedef struct pma_input_q16 {
+    int64_t x0;                   /* offset_cm, Q16.16 in 64 bits */
+    pma_scale_q_t k;              /* counts -> cm: gain_cm_per_count 2^16 */
+    uint16_t wire_break_below_counts, raw_min_counts, raw_max_counts;
+} pma_input_q16_t;
+
+int pma_input_q16_build(pma_input_q16_t *in, const pma_adc_scaling_t *s);
+
+/* pma_adc_counts_to_cm in Q16.16: the same status codes (*x_cm unchanged on an error). */
+static inline int pma_input_q16_cm(const pma_input_q16_t *in, uint16_t raw_counts, pma_q16_t *x_cm)
+{
+    if (raw_counts < in->wire_break_below_counts) return PMA_ERR_WIRE_BREAK;
+    if (raw_counts < in->raw_min_counts || raw_counts > in->raw_max_counts) return PMA_ERR_RANGE;
+    *x_cm = (pma_q16_t)(in->x0 + pma_scale_q_apply(in->k, raw_counts));   /* checked at build */
+    return PMA_OK;
+}
 
 typedef struct pma_output_q16 {
     pma_q16_t p0, p_min, p_max;   /* kPa */
@@ -66,4 +100,4 @@ pma_q16_t pma_output_q16_kpa(const pma_output_q16_t *o, pma_q16_t u, pma_q16_t p
 /* pma_dac_kpa_to_counts of p. */
 uint16_t pma_output_q16_counts(const pma_output_q16_t *o, pma_q16_t p_kpa);
 
-#endif /* PMA_OUTPUT_Q16_H */
+#endif /* PMA_IO_Q16_H */
