@@ -12,6 +12,7 @@ from typing import IO, TYPE_CHECKING
 import numpy as np
 
 from . import paramfile
+from .commission_rules import GM_MIN, PM_MIN_DEG
 from .protocol import Protocol
 
 if TYPE_CHECKING:
@@ -50,12 +51,14 @@ def text(r: Result) -> list[str]:
         f"step responses (median of {len(m.steps)}): gain {f['gain_cm_per_u']:.5f} cm per input unit "
         f"({f['loop_gain_cm_per_u']:.5f} at the loop's crossover), "
         f"lag {1000 * f['tau_s']:.1f} ms{_early_lag(f)}, dead time {1000 * f['theta_s']:.1f} ms",
-        f"loop: SIMC PI Kc {f['kc_u_per_cm']:.1f} per cm, tau_I {1000 * f['tau_i_s']:.1f} ms; "
+        f"loop: SIMC PI Kc {f['kc_u_per_cm']:.1f} per cm, tau_I {1000 * f['tau_i_s']:.1f} ms "
+        f"(tau_c {f['tau_c_s'] / f['theta_eff_s']:.2f} theta_eff); as a PID alone "
         f"phase margin {mg['phase_margin_deg']:.0f} deg, gain margin {mg['gain_margin']:.1f}, "
         f"delay margin {1000 * mg['delay_margin_s']:.0f} ms at {mg['crossover_rad_s']:.1f} rad/s",
-        f"loop with the velocity observer at {d.params['vel.fc_hz']:g} Hz: phase margin "
+        f"loop as built, with the velocity observer at {d.params['vel.fc_hz']:g} Hz: phase margin "
         f"{f['with_observer_phase_margin_deg']:.0f} deg, gain margin {f['with_observer_gain_margin']:.1f}, "
-        f"delay margin {1000 * f['with_observer_delay_margin_s']:.0f} ms",
+        f"delay margin {1000 * f['with_observer_delay_margin_s']:.0f} ms (the rule keeps "
+        f"{PM_MIN_DEG:g} deg and {GM_MIN:g})",
         f"MFAC: lambda {d.params['mfac.lambda']:g}, integral loop gain {f['mfac_k_loop_per_s']:.2f} 1/s at phi = g; "
         f"phase margin {f['mfac_phase_margin_deg']:.0f} deg, gain margin {f['mfac_gain_margin']:.1f}, "
         f"delay margin {1000 * f['mfac_delay_margin_s']:.0f} ms",

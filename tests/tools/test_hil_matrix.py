@@ -1,0 +1,65 @@
+# SPDX-License-Identifier: Apache-2.0
+"""tools/hil_matrix.py: its table rows from run summaries, the tasks' files, its rigs' values
+(each a real rig parameter), its options; one real run, offline, where the library is built."""
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from hil import offline
+from hil import scenario as scn
+from pma_tools import hil_matrix as hm
+
+TOOL = Path(hm.__file__)
+
+
+def lane(rmste: list[float], lost: float | None = None, fallback: float | None = None,
+         state: str = "RUNNING", fault: str = "NONE", viol: int = 0) -> dict[str, Any]:
+    return {"rmste_cm": rmste, "guarantee_lost_at_s": lost, "fallback_at_s": fallback,
+            "final_state": state, "final_fault_code": fault, "constraint_violations": viol}
+
+
+def test_row_states_the_worst_window_and_what_happened():
+    s = {"controllers": {"ppc": lane([0.002, 0.003], lost=1.5), "mfac": lane([0.004, 0.0025], viol=7)}}
+    line, worst = hm.row("R: a rig", "case1", s)
+    assert worst == pytest.approx(1.2)
+    assert line == ("| R: a rig | case1 | 0.0020 0.0030 | 0.0040 0.0025 | 1.20 | 1.50 s / - | 0 / 7 |")
+    s["controllers"]["ppc"] = lane([0.002, 0.002], state="FAULT", fault="BARRIER")
+    line, _ = hm.row("R", "case3", s)
+    assert "(FAULT / BARRIER)" in line and "| - |" in line
+
+
+def test_tasks_on_each_profile_are_the_shipped_files():
+    assert hm.task_file("nominal", "case1") == "case1"
+    for profile in ("dmsp10", "mas10-itv2050"):
+        for task in hm.TASKS:
+            assert Path(hm.task_file(profile, task)).is_file()
+
+
+@pytest.mark.parametrize("matrix", sorted(hm.MATRICES))
+def test_every_rig_value_is_a_rig_parameter(matrix):
+    rigs, _ = hm.MATRICES[matrix]
+    base = scn.load("case1").rig_params()
+    for rig in rigs:
+        assert rig.profile in ("nominal", "dmsp10", "mas10-itv2050")
+        for value in rig.values.split():
+            path, _, number = value.partition("=")
+            base.replace(**{path: float(number)}).validate()   # ValueError for an unknown path
+
+
+def test_bad_options_exit_2():
+    for args in (["--matrix", "eleven"], ["--matrix", "ten", "--jobs", "0"], []):
+        r = subprocess.run([sys.executable, str(TOOL), *args], capture_output=True, text=True)
+        assert r.returncode == 2, (args, r.stderr)
+
+
+@pytest.mark.skipif(not offline.LIB_PATH.exists(), reason="libpma_offline.so not built")
+def test_one_run_gives_its_row(tmp_path):
+    s = hm.run(["constraint_approach", "--quick", "--rig", "load.mass_kg=2.0"], tmp_path / "one.json")
+    line, worst = hm.row("X", "constraint_approach", s)
+    assert line.startswith("| X | constraint_approach | ") and worst > 0.0
+    assert s["controllers"]["ppc"]["final_state"] == "RUNNING"

@@ -1,0 +1,172 @@
+#!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
+"""Every paper task on rigs the controllers were not tuned on: the tables of docs/hil.md
+("Rigs it was not tuned on").
+
+    .venv/bin/python tools/hil_matrix.py --matrix seven --jobs 2          # one table, printed
+    .venv/bin/python tools/hil_matrix.py --matrix variants --jobs 2       # the shipped variant files
+    .venv/bin/python tools/hil_matrix.py --matrix ten --out build/matrix  # and each run's summary
+
+Each run is `python -m hil offline TASK --commission --controller ppc --controller mfac --brief
+--rig PATH=VALUE ... --json FILE` (the firmware offline, both lanes commissioned on that rig over
+CAN frames, docs/hil.md "Offline"), one process each, `--jobs` at a time; the table is read from
+their summaries. A rig is a base profile (nominal, dmsp10, mas10-itv2050: the task files of
+hil/scenarios/ or hil/scenarios/realistic/PROFILE/) and rig parameter values (hil/rig_params.py).
+Deterministic: the same code prints the same table.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import tempfile
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parent.parent
+TASKS = ("case1", "case2a", "case2b", "case3", "constraint_approach", "load_change")
+
+
+@dataclass(frozen=True)
+class Rig:
+    name: str         # the table's label
+    profile: str      # nominal, dmsp10 or mas10-itv2050
+    values: str       # PATH=VALUE ... (hil/rig_params.py)
+
+
+# docs/hil.md, "Beyond the shipped variants": combinations on the paper's rig
+SEVEN = (
+    Rig("A: spring +30 %", "nominal", "muscle.stiffness_scale=1.3"),
+    Rig("B: spring -30 %, regulator lag 2x", "nominal", "muscle.stiffness_scale=0.7 regulator.tau_s=0.06"),
+    Rig("C: regulator lag 3x, dead time 3x", "nominal", "regulator.tau_s=0.09 regulator.dead_time_s=0.015"),
+    Rig("D: noise 3x, 11-bit sensor", "nominal", "sensor.noise_cm=0.0015 sensor.adc_bits=11"),
+    Rig("E: load 1.5 kg (-41 %), dead time 2.4x", "nominal", "load.mass_kg=1.5 regulator.dead_time_s=0.012"),
+    Rig("F: 25 N push, spring -15 %", "nominal", "load.bias_force_n=-25 muscle.stiffness_scale=0.85"),
+    Rig("G: spring +15 %, lag 1.7x, noise 2x", "nominal",
+        "muscle.stiffness_scale=1.15 regulator.tau_s=0.05 sensor.noise_cm=0.001"),
+)
+# docs/hil.md, "On the realistic profiles": rigs on the two measured-muscle profiles
+EIGHT = (
+    Rig("M1: `mas10`, spring -30 %", "mas10-itv2050", "muscle.stiffness_scale=0.7"),
+    Rig("M2: `mas10`, spring +30 %", "mas10-itv2050", "muscle.stiffness_scale=1.3"),
+    Rig("M3: `mas10`, valve half as fast, exhaust dead time 50 ms", "mas10-itv2050",
+        "valve.fill_rate_kpa_s=2800 valve.exhaust_rate_kpa_s=2700 valve.dead_time_fall_s=0.05"),
+    Rig("M4: `mas10`, 30 N push, noise 3x", "mas10-itv2050", "load.bias_force_n=-30 sensor.noise_cm=0.0015"),
+    Rig("M5: `mas10`, load 1.5 kg, creep 1.5x", "mas10-itv2050",
+        "load.mass_kg=1.5 creep.frac_contract=0.23 creep.frac_relax=0.39"),
+    Rig("D1: `dmsp10`, spring -30 %", "dmsp10", "muscle.stiffness_scale=0.7"),
+    Rig("D2: `dmsp10`, spring +30 %, valve 1.5x as fast", "dmsp10",
+        "muscle.stiffness_scale=1.3 valve.fill_rate_kpa_s=1350 valve.exhaust_rate_kpa_s=1300"),
+    Rig("D3: `dmsp10`, slow exhaust 0.5, hysteresis 1.6x", "dmsp10",
+        "valve.slow_weight_fall=0.5 muscle.hyst_force_n=40"),
+)
+# docs/hil.md, "Ten rigs of an audit": chosen by someone who had not seen the rules, full length
+TEN = (
+    Rig("N1: heavy, spring -25 %, slow regulator", "nominal",
+        "load.mass_kg=3.5 muscle.stiffness_scale=0.75 regulator.tau_s=0.065 regulator.dead_time_s=0.011"),
+    Rig("N2: spring +22 %, 10 N push, noise 2.4x", "nominal",
+        "muscle.stiffness_scale=1.22 load.bias_force_n=10 sensor.noise_cm=0.0012 regulator.dead_time_s=0.009"),
+    Rig("N3: hysteresis, warming, creep, 2 kg", "nominal",
+        "muscle.hyst_force_n=55 drift.temp_rate_k_per_s=0.15 drift.temp_max_rise_k=25 creep.frac_contract=0.08 "
+        "creep.frac_relax=0.12 load.mass_kg=2.0"),
+    Rig("N4: 11-bit noisy sensor, 18 N pull, slow regulator", "nominal",
+        "sensor.adc_bits=11 sensor.noise_cm=0.0025 sensor.adc_noise_counts=1.0 load.bias_force_n=-18 "
+        "regulator.tau_s=0.1 regulator.dead_time_s=0.015"),
+    Rig("M6: `mas10`, valve dead time 45 / 80 ms, 3.3 kg, spring -15 %", "mas10-itv2050",
+        "muscle.stiffness_scale=0.85 load.mass_kg=3.3 valve.dead_time_rise_s=0.045 valve.dead_time_fall_s=0.08 "
+        "sensor.noise_cm=0.001"),
+    Rig("M7: `mas10`, spring +12 %, slow valve, 15 N push", "mas10-itv2050",
+        "muscle.stiffness_scale=1.12 valve.fill_rate_kpa_s=3500 valve.exhaust_rate_kpa_s=2200 load.bias_force_n=15 "
+        "muscle.hyst_force_n=22"),
+    Rig("M8: `mas10`, creep, warming, 20 N pull, 11-bit", "mas10-itv2050",
+        "creep.frac_contract=0.1 creep.frac_relax=0.18 drift.temp_rate_k_per_s=0.25 drift.temp_max_rise_k=25 "
+        "load.bias_force_n=-20 sensor.adc_bits=11 valve.slow_weight_fall=0.45"),
+    Rig("D4: `dmsp10`, valve dead time 70 / 120 ms, 3 kg", "dmsp10",
+        "muscle.stiffness_scale=0.8 load.mass_kg=3.0 valve.dead_time_rise_s=0.07 valve.dead_time_fall_s=0.12 "
+        "sensor.noise_cm=0.0012"),
+    Rig("D5: `dmsp10`, spring +18 %, valve 2.5x slower", "dmsp10",
+        "muscle.stiffness_scale=1.18 valve.fill_rate_kpa_s=600 valve.exhaust_rate_kpa_s=500 muscle.hyst_force_n=33 "
+        "creep.frac_relax=0.33"),
+    Rig("D6: `dmsp10`, light, warming, 11-bit noisy", "dmsp10",
+        "load.mass_kg=1.3 drift.temp_rate_k_per_s=0.3 drift.temp_max_rise_k=30 sensor.adc_bits=11 "
+        "sensor.noise_cm=0.002 valve.p_band_kpa=20"),
+)
+MATRICES = {"seven": (SEVEN, True), "eight": (EIGHT, True), "ten": (TEN, False)}   # (rigs, case3 --quick)
+
+
+def task_file(profile: str, task: str) -> str:
+    return task if profile == "nominal" else str(ROOT / "hil/scenarios/realistic" / profile / f"{task}.toml")
+
+
+def run(args: list[str], json_path: Path) -> dict[str, Any]:
+    cmd = [sys.executable, "-m", "hil", "offline", *args, "--commission", "--controller", "ppc",
+           "--controller", "mfac", "--brief", "--json", str(json_path)]
+    proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
+    if not json_path.exists():
+        raise RuntimeError(f"{' '.join(cmd)} failed ({proc.returncode}):\n{proc.stdout[-2000:]}{proc.stderr[-2000:]}")
+    summaries: list[dict[str, Any]] = json.loads(json_path.read_text())
+    return summaries[0]
+
+
+def fmt(values: list[float | None]) -> str:
+    return " ".join("-" if v is None else f"{v:.4f}" for v in values)
+
+
+def row(label: str, task: str, s: dict[str, Any]) -> tuple[str, float]:
+    p, m = s["controllers"]["ppc"], s["controllers"]["mfac"]
+    worst = max(a / b for a, b in zip(p["rmste_cm"], m["rmste_cm"]))
+    lost = "-" if p["guarantee_lost_at_s"] is None else f"{p['guarantee_lost_at_s']:.2f} s"
+    fb = "-" if p["fallback_at_s"] is None else f"{p['fallback_at_s']:.2f} s"
+    state = "" if (p["final_state"], p["final_fault_code"]) == ("RUNNING", "NONE") else \
+        f" ({p['final_state']} / {p['final_fault_code']})"
+    lost_col = "-" if lost == fb == "-" else f"{lost} / {fb}"
+    return (f"| {label} | {task} | {fmt(p['rmste_cm'])} | {fmt(m['rmste_cm'])} | {worst:.2f}{state} | {lost_col} | "
+            f"{p['constraint_violations']} / {m['constraint_violations']} |", worst)
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--matrix", choices=sorted(MATRICES) + ["variants"], required=True)
+    ap.add_argument("--jobs", type=int, default=1, help="runs at a time (default 1)")
+    ap.add_argument("--out", type=Path, help="keep each run's summary JSON in this folder")
+    args = ap.parse_args()
+    if args.jobs < 1:
+        ap.error("--jobs must be at least 1")
+    out = args.out or Path(tempfile.mkdtemp(prefix="hil_matrix_"))
+    out.mkdir(parents=True, exist_ok=True)
+    jobs: list[tuple[str, str, list[str]]] = []
+    if args.matrix == "variants":
+        for f in sorted((ROOT / "hil/scenarios/variants").glob("*.toml")):
+            jobs.append((f.stem, "", [str(f)]))
+    else:
+        rigs, quick3 = MATRICES[args.matrix]
+        for rig in rigs:
+            for task in TASKS:
+                extra = ["--quick"] if quick3 and task == "case3" else []
+                rig_args = [a for v in rig.values.split() for a in ("--rig", v)]
+                label = f"{task} (quick)" if extra else task
+                jobs.append((rig.name, label, [task_file(rig.profile, task), *extra, *rig_args]))
+
+    def one(i: int) -> dict[str, Any]:
+        return run(jobs[i][2], out / f"run_{i:03d}.json")
+
+    with ThreadPoolExecutor(max_workers=args.jobs) as pool:
+        summaries = list(pool.map(one, range(len(jobs))))
+    print("| rig | task | ppc RMSTE per window | mfac RMSTE per window | worst ppc/mfac | ppc lost / MFAC from "
+          "| x >= constraint (ppc / mfac) |")
+    print("|---|---|---|---|---|---|---|")
+    ahead = 0
+    for (label, task, _), s in zip(jobs, summaries):
+        line, worst = row(label, task, s)
+        ahead += worst <= 1.001
+        print(line)
+    print(f"\n{ahead} of {len(jobs)} runs with the paper's controller ahead of MFAC or level (0.1 %) in every window"
+          f" (summaries: {out})")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
