@@ -548,6 +548,31 @@ static void test_stop_and_disarm_outputs(void)
     TEST_ASSERT_EQUAL_INT(0, dac_now());
 }
 
+/* The sensor's and the actuator's scalings changed while IDLE take effect: the position at the
+ * next tick, the pressure at the next ARM (the Q16.16 builds' fixed-point stages are rebuilt
+ * then, their parameters being idle-only), and SET refuses them while the output is active. */
+static void test_idle_changes_reach_the_stages_at_arm(void)
+{
+    start_with(0, -1.5f);
+    steps(5);                                      /* a sample */
+    command_ok(PMA_CMD_ARM, 0, PMA_OK);
+    steps(400);
+    TEST_ASSERT_EQUAL_INT(T_P0_COUNTS, dac_now());
+    const float cpk = app.params.dac_counts_per_kpa * 1.1f;
+    assert_status(set_param(PMA_PARAM_DAC_COUNTS_PER_KPA, vf(cpk)), PMA_ERR_STATE);
+    assert_status(set_param(PMA_PARAM_ADC_OFFSET_CM, vf(app.params.adc_offset_cm + 0.3f)), PMA_ERR_STATE);
+    command_ok(PMA_CMD_DISARM, 0, PMA_OK);
+    assert_status(set_param(PMA_PARAM_DAC_COUNTS_PER_KPA, vf(cpk)), PMA_OK);
+    assert_status(set_param(PMA_PARAM_ADC_OFFSET_CM, vf(app.params.adc_offset_cm + 0.3f)), PMA_OK);
+    step();
+    assert_near(app.sensor.x_cm, -1.2f, 0.002);   /* the same counts, 0.3 cm further */
+    command_ok(PMA_CMD_ARM, 0, PMA_OK);
+    steps(400);                                    /* the slew from 0 kPa */
+    TEST_ASSERT_EQUAL_INT(dac_counts_of(app.params.act_p0_kpa), dac_now());   /* the new DAC scaling */
+    TEST_ASSERT_NOT_EQUAL(T_P0_COUNTS, dac_now());
+    assert_near(app.sensor.x_cm, -1.2f, 0.002);
+}
+
 /* pma_app_init on a HAL that is not up: the error, state FAULT, no loop. */
 static void test_init_errors(void)
 {
@@ -591,6 +616,7 @@ int main(void)
     RUN_TEST(test_start_refused_bad_params);
     RUN_TEST(test_start_refused_outside_fixed_point);
     RUN_TEST(test_stop_and_disarm_outputs);
+    RUN_TEST(test_idle_changes_reach_the_stages_at_arm);
     RUN_TEST(test_init_errors);
     RUN_TEST(test_state_names);
     return UNITY_END();
