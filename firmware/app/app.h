@@ -214,7 +214,6 @@ typedef struct pma_app_timing {
 #endif
 } pma_app_timing_t;
 
-/* This tick's position sample, from the ADC or the plant bridge. */
 #define PMA_APP_INPUT_KEY_WORDS 5u
 /* The fixed-point input stage (io_q16.h) of the Q16.16 builds, built from the parameters in
  * `key` (their bits) while the output is inactive, kept while it is active (adc.* are
@@ -225,6 +224,7 @@ typedef struct pma_app_input_q16 {
     uint8_t built, ok;
 } pma_app_input_q16_t;
 
+/* This tick's position sample, from the ADC or the plant bridge. */
 typedef struct pma_app_sensor {
     uint16_t raw_counts;
     int status;                    /* PMA_OK or the conversion's error */
@@ -262,7 +262,6 @@ typedef struct pma_app_output {
 #if PMA_CTRL_Q16
     pma_q16_t u_q16;               /* u in Q16.16, the slot's own number (always u's value) */
 #endif
-
     float p_kpa;                   /* the pressure command */
     uint16_t dac_counts;           /* and its DAC code */
 #if PMA_CTRL_Q16

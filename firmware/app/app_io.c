@@ -28,20 +28,6 @@ void pma_app_sync_bridge(pma_app_t *app)
 }
 
 #if PMA_CTRL_Q16
-/* Whether key[0..n) equals the stage's stored key (then 1), else stores it (0): a stage is
- * rebuilt when one of the values it is built from changed (their bits compared: a few
- * instructions a tick, and no path that changes a parameter can miss it). */
-static int same_key(uint32_t *stored, uint8_t *built, const uint32_t *key, unsigned n)
-{
-    int same = *built;
-    for (unsigned i = 0; same && i < n; ++i) same = key[i] == stored[i];
-    if (!same) {
-        memcpy(stored, key, n * sizeof key[0]);
-        *built = 1;
-    }
-    return same;
-}
-
 /* ARM: the fixed-point stages are built again at the first active tick; from then on, while
  * the output is active, they are used as built (their parameters, adc.*, act.*, dac.*,
  * safety.safe_* and sys.tick_hz, are idle-only: SET refuses them then). */
@@ -51,8 +37,10 @@ void pma_app_io_q16_arm(pma_app_t *app)
     app->output.q16.built = 0;
 }
 
-/* The fixed-point input stage of the parameters as they are; NULL where it cannot represent
- * them (the float function then runs, and reports an invalid scaling). */
+/* The fixed-point input stage of the parameters as they are, rebuilt while the output is
+ * inactive when one of the values it is built from changed (their bits compared: a few
+ * instructions a tick, and no path that changes a parameter can miss it); NULL where it cannot
+ * represent them (the float function then runs, and reports an invalid scaling). */
 static const pma_input_q16_t *input_q16(pma_app_t *app)
 {
     pma_app_input_q16_t *c = &app->sensor.q16;
@@ -66,10 +54,12 @@ static const pma_input_q16_t *input_q16(pma_app_t *app)
     key[NF] = p->adc_raw_min_counts;
     key[NF + 1] = p->adc_raw_max_counts;
     key[NF + 2] = p->adc_wire_break_below_counts;
-    if (!same_key(c->key, &c->built, key, PMA_APP_INPUT_KEY_WORDS)) {
+    if (!c->built || memcmp(key, c->key, sizeof key) != 0) {
         pma_adc_scaling_t s;
         pma_app_adc_scaling(p, &s);
         c->ok = (uint8_t)(pma_input_q16_build(&c->stage, &s) == PMA_OK);
+        memcpy(c->key, key, sizeof key);
+        c->built = 1;
     }
     return c->ok ? &c->stage : NULL;
 }

@@ -25,7 +25,6 @@ static int to_scale(float r, pma_scale_q_t *sc)
     return PMA_OK;
 }
 
-
 static int q16_of(float v, pma_q16_t *q)
 {
     if (!(v > -32767.0f && v < 32767.0f)) return PMA_ERR_FIXED_RANGE;

@@ -44,9 +44,10 @@ EARLY_SMOOTH = 5             # samples of the centred moving average the early l
 TAU_C_PER_THETA_MIN, TAU_C_PER_THETA_MAX = 0.35, 3.0
 PM_MIN_DEG, GM_MIN = 45.0, 2.0
 SPEEDUP_MAX = 5.0            # tau_c >= tau / 5: the closed loop at most 5x faster than the open loop
-# the velocity observer's bandwidth in units of the loop's crossover: the law's feedforward integrator
+# the velocity observer's bandwidth in units of the crossover of the tightest loop the rule allows
+# (TAU_C_PER_THETA_MIN; a looser loop keeps the observer and gains phase): the law's feedforward integrator
 # takes 30/31 of its proportional action through the observer's velocity, whose lag at the crossover
-# is 2 atan(1 / FC_PER_CROSSOVER): 14 deg here, 28 deg at 4x (docs/commissioning.md, "The rules")
+# is at most 2 atan(1 / FC_PER_CROSSOVER): 14 deg here, 28 deg at 4x (docs/commissioning.md, "The rules")
 FC_PER_CROSSOVER = 8.0
 FC_MIN_HZ, FC_MAX_HZ = 2.0, 50.0
 FF_PER_KP = 30.0             # the feedforward integrator's gain k_ff in units of K_p
