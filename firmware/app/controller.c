@@ -107,15 +107,20 @@ int pma_ctrl_start(pma_ctrl_t *s, const pma_params_t *p, float period_s)
     return pma_ctrl_init_arith(s, &su);
 }
 
-void pma_ctrl_monitor(pma_ctrl_t *s, float t_s, int outside_w1, uint32_t law_flags)
+int pma_ctrl_monitor(pma_ctrl_t *s, int outside_w1, uint32_t law_flags)
 {
     const uint8_t barrier = (law_flags & (PMA_PPC_FLAG_BARRIER1 | PMA_PPC_FLAG_BARRIER2)) != 0;
     const int widened = (law_flags & (PMA_PPC_FLAG_WIDEN1 | PMA_PPC_FLAG_WIDEN2)) != 0;
     s->barrier_run = barrier ? s->barrier_run + 1u : 0u;
-    const uint8_t sat = (uint8_t)(law_flags & PMA_CTRL_SAT_FLAGS);
-    s->widen1_held &= sat;
+    s->widen1_held &= (uint8_t)(law_flags & PMA_CTRL_SAT_FLAGS);
     const int clamp_run = s->barrier_ticks != 0 && s->barrier_run >= s->barrier_ticks;
-    if (!outside_w1 && !clamp_run && !widened) return;
+    return outside_w1 || clamp_run || widened;
+}
+
+void pma_ctrl_monitor_lost(pma_ctrl_t *s, float t_s, uint32_t law_flags)
+{
+    const uint8_t sat = (uint8_t)(law_flags & PMA_CTRL_SAT_FLAGS);
+    const int clamp_run = s->barrier_ticks != 0 && s->barrier_run >= s->barrier_ticks;
     if (!s->lost) s->lost_at_s = t_s;
     s->lost = 1;
     if (s->lost_ticks != UINT32_MAX) ++s->lost_ticks;

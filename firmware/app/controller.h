@@ -119,9 +119,12 @@ typedef struct pma_ctrl_setup {
 int pma_ctrl_init_arith(pma_ctrl_t *s, const pma_ctrl_setup_t *su);
 /* The PPC's guarantee monitor for one step, in either arithmetic (see below): outside_w1 is
  * t >= t_u and |e| >= w1, law_flags the law's PMA_PPC_FLAG_* of this step (a barrier clamp, a
- * widening); it counts the clamp run and the lost ticks, latches `lost` with `lost_at_s` [s]
- * and, with the MFAC fallback, hands over. */
-void pma_ctrl_monitor(pma_ctrl_t *s, float t_s, int outside_w1, uint32_t law_flags);
+ * widening). pma_ctrl_monitor counts the clamp run and returns nonzero where this step lost the
+ * guarantee; then pma_ctrl_monitor_lost, with the step's time t_s [s] (taken only then: the
+ * Q16.16 slot converts it to float only for it), counts the lost ticks, latches `lost` with
+ * `lost_at_s` and, with the MFAC fallback, hands over. */
+int pma_ctrl_monitor(pma_ctrl_t *s, int outside_w1, uint32_t law_flags);
+void pma_ctrl_monitor_lost(pma_ctrl_t *s, float t_s, uint32_t law_flags);
 /* The arithmetic's part of pma_ctrl_stream, after the band check. */
 int pma_ctrl_stream_arith(pma_ctrl_t *s, float target_cm);
 

@@ -99,7 +99,9 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
             o->internal2 = s->c.ppc.out.lambda2_cm_s;
             o->barrier = (uint8_t)((o->flags & (PMA_PPC_FLAG_BARRIER1 | PMA_PPC_FLAG_BARRIER2)) != 0);
         }
-        pma_ctrl_monitor(s, t_s, t_s >= s->t_u_s && fabsf(o->e_cm) >= s->w1_cm, o->flags);
+        if (pma_ctrl_monitor(s, t_s >= s->t_u_s && fabsf(o->e_cm) >= s->w1_cm, o->flags)) {
+            pma_ctrl_monitor_lost(s, t_s, o->flags);
+        }
         /* the fallback's MFAC runs every tick: its law once it is in charge (from the tick of
          * the hand-over), before that only its estimator, on the input the law applied */
         if (s->fallback_active) {

@@ -169,7 +169,9 @@ int pma_ctrl_step_q16(pma_ctrl_t *s, pma_q16_t t, pma_q16_t x, float openloop_u,
             o->internal2 = s->c.ppc.out.lambda2_cm_s;
             barrier = (uint8_t)((flags & (PMA_PPC_FLAG_BARRIER1 | PMA_PPC_FLAG_BARRIER2)) != 0);
         }
-        pma_ctrl_monitor(s, pma_q16_to_f32(t), t >= s->q_t_u_s && q16_abs(o->e_cm) >= s->q_w1_cm, flags);
+        if (pma_ctrl_monitor(s, t >= s->q_t_u_s && q16_abs(o->e_cm) >= s->q_w1_cm, flags)) {
+            pma_ctrl_monitor_lost(s, pma_q16_to_f32(t), flags);
+        }
         /* as controller_f32.c: the fallback's law once in charge, before that its estimator */
         if (s->fallback_active) {
             CHECK(pma_mfac_step_q16(&s->shadow, x, next_reference(s, t), &out));

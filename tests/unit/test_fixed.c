@@ -185,6 +185,23 @@ static void test_cos_sin_accuracy(void)
     assert_near(pma_q30_sin_2pi_frac32(0xC0000000u) / 1073741824.0, -1.0, 1e-7);
 }
 
+/* the tuning function's sin^2(pi x / 2): the bits of (1 - cos(pi x)) / 2 on [0, 1], 1 above */
+static void test_sin2_halfpi_is_cos_to_the_bit(void)
+{
+    for (uint32_t x = 0; x <= (uint32_t)PMA_Q30_ONE; x += 65521u) {
+        TEST_ASSERT_EQUAL_INT(((int64_t)PMA_Q30_ONE - pma_q30_cos_pi((pma_q30_t)x)) / 2, pma_q30_sin2_halfpi(x));
+    }
+    const uint32_t edges[] = {0u, 1u, (uint32_t)PMA_Q30_ONE / 2u - 1u, (uint32_t)PMA_Q30_ONE / 2u,
+                              (uint32_t)PMA_Q30_ONE / 2u + 1u, (uint32_t)PMA_Q30_ONE - 1u, (uint32_t)PMA_Q30_ONE};
+    for (size_t i = 0; i < sizeof edges / sizeof edges[0]; ++i) {
+        TEST_ASSERT_EQUAL_INT(((int64_t)PMA_Q30_ONE - pma_q30_cos_pi((pma_q30_t)edges[i])) / 2,
+                              pma_q30_sin2_halfpi(edges[i]));
+    }
+    TEST_ASSERT_EQUAL_INT(0, pma_q30_sin2_halfpi(0u));
+    TEST_ASSERT_EQUAL_INT(PMA_Q30_ONE, pma_q30_sin2_halfpi((uint32_t)PMA_Q30_ONE));
+    TEST_ASSERT_EQUAL_INT(PMA_Q30_ONE, pma_q30_sin2_halfpi(0xFFFFFFFFu));   /* above 1: 1 */
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -195,6 +212,7 @@ int main(void)
     RUN_TEST(test_conversions_match_their_definitions);
     RUN_TEST(test_tan_halfpi_accuracy);
     RUN_TEST(test_tan_halfpi_monotone_exact);
+    RUN_TEST(test_sin2_halfpi_is_cos_to_the_bit);
     RUN_TEST(test_cos_sin_accuracy);
     return UNITY_END();
 }

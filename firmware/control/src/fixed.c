@@ -94,29 +94,31 @@ float pma_q30_to_f32(pma_q30_t a)
     return (float)a * (1.0f / 1073741824.0f);
 }
 
-/* round(a b / 2^shift) for unsigned operands, 1 <= shift <= 31, result
- * < 2^32 (one UMULL on ARMv7-M, partial products on ARMv6-M). */
-static inline uint32_t umul_shift(uint32_t a, uint32_t b, unsigned shift)
+/* round(a b / 2^16) for b < 2^16 (any a): two 16 x 16 products, exact on every core. Where an
+ * operand needs only 16 bits (the small high-order terms of Horner's rule, whose error the
+ * later steps shrink), this costs about a quarter of pma_umul_shift on ARMv6-M. */
+static inline uint32_t umul16_shift16(uint32_t a, uint32_t b)
 {
-#if defined(__ARM_ARCH_6M__)
-    uint32_t hi;
-    const uint32_t low = pma_umul32_v6m(a, b, &hi);
-    const uint32_t low_r = low + ((uint32_t)1 << (shift - 1u));
-    hi += low_r < low;                     /* carry of the rounding add */
-    return (hi << (32u - shift)) | (low_r >> shift);
-#else
-    return (uint32_t)(((uint64_t)a * b + ((uint64_t)1 << (shift - 1u))) >> shift);
-#endif
+    return (a >> 16) * b + (((a & 0xFFFFu) * b + 0x8000u) >> 16);
+}
+
+/* v (< 2^32) to 16 bits: round(v / 2^shift), at most 0xFFFF */
+static inline uint32_t round_to16(uint32_t v, unsigned shift)
+{
+    const uint32_t r = (v >> shift) + ((v >> (shift - 1u)) & 1u);
+    return r > 0xFFFFu ? 0xFFFFu : r;
 }
 
 /* tan(pi r / 2) = r g(r^2) / (1 - r^2); g(u) = G0 - u (G1 + u (G2 + u G3))
  * with G0..G3 > 0 (signs folded in, so Horner runs in unsigned arithmetic):
  * least-squares fit weighted for relative error on [0, 1)
- * (tools/fit_fixed_poly.py), max relative error 1.4e-6. Q2.30. */
+ * (tools/fit_fixed_poly.py), max relative error 1.4e-6 (with u to 16 bits in the first two
+ * Horner steps, below 1.6e-6). Q2.30. */
 #define TAN_G0 1686631833u   /* 1.5707983011850581 */
 #define TAN_G1 299496310u    /* 0.2789276745391055 */
 #define TAN_G2 17785356u     /* 0.0165639033588072 */
-#define TAN_G3 2217795u      /* 0.0020654821500586 */
+#define TAN_G3_Q24 34653u    /* 0.0020654821500586, Q8.24: G3 u and (G2 + G3 u) u take u to 16
+                              * bits (error below 2e-7 of g, whose lowest value is 1.27) */
 
 /* round(num 2^16 / den) for num < 2^31, 0 < den <= 2^30, with 32-bit
  * divisions only (64-bit division is a long library routine on every core).
@@ -173,11 +175,12 @@ pma_q16_t pma_q16_tan_halfpi(pma_q30_t r)
     const int neg = r < 0;
     const uint32_t ar = neg ? (uint32_t)0 - (uint32_t)r : (uint32_t)r;
     if (ar >= (uint32_t)PMA_Q30_ONE) return neg ? -PMA_Q16_MAX : PMA_Q16_MAX;
-    const uint32_t u = umul_shift(ar, ar, 30);                  /* r^2, Q30, < 1 */
-    uint32_t h = TAN_G2 + umul_shift(TAN_G3, u, 30);
-    h = TAN_G1 + umul_shift(h, u, 30);
-    const uint32_t g = TAN_G0 - umul_shift(h, u, 30);           /* Q30, in [1.27, 1.571] */
-    const uint32_t num = umul_shift(ar, g, 30);                 /* r g, Q30 */
+    const uint32_t u = pma_umul_shift(ar, ar, 30);              /* r^2, Q30, < 1 */
+    const uint32_t u16 = round_to16(u, 14);                     /* r^2, Q16 */
+    uint32_t h = TAN_G2 + ((TAN_G3_Q24 * u16 + 512u) >> 10);    /* Q24 Q16 = Q40 to Q30 */
+    h = TAN_G1 + umul16_shift16(h, u16);
+    const uint32_t g = TAN_G0 - pma_umul_shift(h, u, 30);       /* Q30, in [1.27, 1.571] */
+    const uint32_t num = pma_umul_shift(ar, g, 30);             /* r g, Q30 */
     const uint32_t den = (uint32_t)PMA_Q30_ONE - u;             /* 1 - r^2 > 0 */
     const pma_q16_t q = (pma_q16_t)udiv_q16(num, den);
     return neg ? -q : q;
@@ -186,29 +189,45 @@ pma_q16_t pma_q16_tan_halfpi(pma_q30_t r)
 /* cos(pi s) = 1 - x (C1 - x (C2 - x (C3 - x C4))), x = s^2, |s| <= 1/2,
  * C1..C4 > 0 (signs folded in; every bracket stays positive for x <= 1/4,
  * so Horner runs unsigned); least-squares fit with cos(0) = 1 exactly: max
- * abs error 5.5e-8. Q4.28 (C1 and C2 exceed 2). */
+ * abs error 5.5e-8 (with x to 16 bits in the first Horner step, below 7e-8). Q4.28 (C1 and
+ * C2 exceed 2). */
 #define COS_C1 1324674033u   /* 4.9347953240805404 */
 #define COS_C2 1089431141u   /* 4.0584472586995    */
 #define COS_C3 357574299u    /* 1.3320680658776491 */
-#define COS_C4 59063867u     /* 0.2200300516253903 */
+#define COS_C4_Q18 57680u    /* 0.2200300516253903, Q14.18: C4 x takes x to 16 bits (Q18) */
+
+/* 1 - cos(pi a) for a in [0, 1/2] (Q30), Q30, at most 1 */
+static uint32_t one_minus_cos_pi(uint32_t a)
+{
+    const uint32_t x = pma_umul_shift(a, a, 30);                /* Q30, <= 1/4 */
+    uint32_t h = COS_C3 - ((COS_C4_Q18 * round_to16(x, 12) + 128u) >> 8);   /* Q36 to Q28 */
+    h = COS_C2 - pma_umul_shift(h, x, 30);
+    h = COS_C1 - pma_umul_shift(h, x, 30);                      /* Q28, in [3.9, 4.94] */
+    const uint32_t d = pma_umul_shift(h, x, 28);
+    return d > (uint32_t)PMA_Q30_ONE ? (uint32_t)PMA_Q30_ONE : d;
+}
 
 pma_q30_t pma_q30_cos_pi(pma_q30_t s)
 {
     /* fold to s in [0, 1]: cos is even and cos(pi s) = cos(pi (2 - s)) */
     uint32_t a = s < 0 ? (uint32_t)0 - (uint32_t)s : (uint32_t)s;
     if (a > (uint32_t)PMA_Q30_ONE) a = 2u * (uint32_t)PMA_Q30_ONE - a;
-    int negate = 0;
     if (a > (uint32_t)PMA_Q30_ONE / 2u) {       /* cos(pi s) = -cos(pi (1 - s)) */
-        a = (uint32_t)PMA_Q30_ONE - a;
-        negate = 1;
+        return -(pma_q30_t)((uint32_t)PMA_Q30_ONE - one_minus_cos_pi((uint32_t)PMA_Q30_ONE - a));
     }
-    const uint32_t x = umul_shift(a, a, 30);                    /* Q30, <= 1/4 */
-    uint32_t h = COS_C3 - umul_shift(COS_C4, x, 30);
-    h = COS_C2 - umul_shift(h, x, 30);
-    h = COS_C1 - umul_shift(h, x, 30);                          /* Q28, in [3.9, 4.94] */
-    const uint32_t d = umul_shift(h, x, 28);                    /* 1 - cos, Q30, <= 1 */
-    const int32_t c = d >= (uint32_t)PMA_Q30_ONE ? 0 : (int32_t)((uint32_t)PMA_Q30_ONE - d);
-    return (pma_q30_t)(negate ? -c : c);
+    return (pma_q30_t)((uint32_t)PMA_Q30_ONE - one_minus_cos_pi(a));
+}
+
+/* (1 - cos(pi x)) / 2 = (PMA_Q30_ONE - pma_q30_cos_pi(x)) / 2 to the bit, without the fold of
+ * negative arguments and the sign: 1 - (1 - cos(pi (1 - x))) / 2 from x = 1/2 on */
+pma_q30_t pma_q30_sin2_halfpi(uint32_t x)
+{
+    if (x > (uint32_t)PMA_Q30_ONE) x = (uint32_t)PMA_Q30_ONE;
+    if (x > (uint32_t)PMA_Q30_ONE / 2u) {
+        const uint32_t d = one_minus_cos_pi((uint32_t)PMA_Q30_ONE - x);
+        return (pma_q30_t)((2u * (uint32_t)PMA_Q30_ONE - d) >> 1);
+    }
+    return (pma_q30_t)(one_minus_cos_pi(x) >> 1);
 }
 
 pma_q30_t pma_q30_sin_2pi_frac32(uint32_t frac)

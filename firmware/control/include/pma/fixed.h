@@ -60,6 +60,21 @@ static inline int64_t pma_mul32(int32_t a, int32_t b)
 #endif
 }
 
+/* round(a b / 2^shift) for unsigned operands, 1 <= shift <= 31, result < 2^32 (one UMULL on
+ * ARMv7-M, partial products on ARMv6-M, with no 64-bit shift or add on either). */
+static inline uint32_t pma_umul_shift(uint32_t a, uint32_t b, unsigned shift)
+{
+#if defined(__ARM_ARCH_6M__)
+    uint32_t hi;
+    const uint32_t low = pma_umul32_v6m(a, b, &hi);
+    const uint32_t low_r = low + ((uint32_t)1 << (shift - 1u));
+    hi += low_r < low;                     /* carry of the rounding add */
+    return (hi << (32u - shift)) | (low_r >> shift);
+#else
+    return (uint32_t)(((uint64_t)a * b + ((uint64_t)1 << (shift - 1u))) >> shift);
+#endif
+}
+
 /* Round-to-nearest (ties away from zero) right shift of a signed 64-bit
  * value with |p| < 2^63, 1 <= shift <= 62; defined for negative values. */
 static inline int64_t pma_rshift_round(int64_t p, unsigned shift)
@@ -165,6 +180,10 @@ pma_q16_t pma_q16_tan_halfpi(pma_q30_t r);
  * Absolute error < 1e-7 (1 + x Q(x), x = s^2, Q of degree 3 on |s| <= 1/2,
  * folded by symmetry); cos(0) is exactly 1. */
 pma_q30_t pma_q30_cos_pi(pma_q30_t s);
+
+/* sin^2(pi x / 2) = (1 - cos(pi x)) / 2 for x in Q2.30, x in [0, 1] (above 1: 1); result
+ * Q2.30, the same bits as (PMA_Q30_ONE - pma_q30_cos_pi(x)) / 2 (the paper's tuning function). */
+pma_q30_t pma_q30_sin2_halfpi(uint32_t x);
 
 /* sin(2 pi * f) for a fraction of a turn f = frac / 2^32 (unsigned Q0.32, so
  * phase arithmetic wraps exactly modulo one turn); result Q2.30,
