@@ -130,6 +130,32 @@ def test_loop_gain_is_the_median_of_the_steps_slopes():
     assert d.params["mfac.eps"] == pytest.approx(rules.MFAC_EPS_PER_GAIN * 0.0021)
 
 
+def test_a_step_that_did_not_move_takes_the_lag_of_those_that_did():
+    """On a coarse, noisy sensor the steps into the dead band move less than MOVED_SIGMAS noise
+    deviations (no first movement measured) and fit the noise: lags of a sample or two, whose
+    slopes g / tau would be the largest of all and design a loop several times too slow. They
+    take the median lag of the steps that moved; their gains stay. Where no step's movement was
+    measured (no noise given), every fit's lag stands."""
+    dead = [StepFit(300.0 + 200 * i, 45.0, -0.0002, tau, 0.0, 0.0) for i, tau in enumerate((2e-4, 1.4e-3, 2e-3))]
+    moving = [StepFit(300.0 + 200 * i, -45.0, g, tau, 0.06, 0.0, first_move_s=0.07)
+              for i, (g, tau) in enumerate(((-0.004, 0.1), (-0.003, 0.12), (-0.005, 0.09)))]
+    m = _measured()
+    m.steps = dead + moving
+    f = derive(m, TASK).figures
+    lag = 0.1                                  # the median of the moving steps' lags
+    slopes = [0.0002 / lag] * 3 + [0.004 / 0.1, 0.003 / 0.12, 0.005 / 0.09]
+    assert f["tau_s"] == pytest.approx(lag)
+    assert f["loop_gain_cm_per_u"] == pytest.approx(float(np.median(slopes)) * lag)
+    assert f["gain_cm_per_u"] == pytest.approx(0.0016)          # MFAC's median gain: all six steps
+    for s in m.steps:
+        s.first_move_s = math.nan                                # nothing measured: the fits stand
+    unmeasured = derive(m, TASK).figures
+    fitted = [2e-4, 1.4e-3, 2e-3, 0.1, 0.12, 0.09]
+    assert unmeasured["loop_gain_cm_per_u"] == pytest.approx(
+        float(np.median([abs(s.gain_cm_per_kpa) / t for s, t in zip(m.steps, fitted)])) * float(np.median(fitted)))
+    assert f["kc_u_per_cm"] > 2 * unmeasured["kc_u_per_cm"]
+
+
 def test_fit_step_refuses_a_flat_or_short_record():
     t = np.arange(0.0, 1.0, 1e-3)
     with pytest.raises(CommissionError):

@@ -18,10 +18,8 @@ What must hold on every variant, whether or not the paper's guarantee can (docs/
 - where it is lost, the firmware says so: the GUARANTEE_LOST flag in TELEM_E from the lost tick
   on; the hand-over to MFAC (FALLBACK), if any, comes no earlier;
 - the lane tracks at least as well as MFAC on its own commissioned set on the same rig: its
-  RMSTE at most MFAC's in every window, or level: within 0.1 % (MFAC_SLACK: two lanes held at
-  the same input limit) or within a hundredth of the sensor's step (LEVEL_SENSOR_STEPS: a
-  difference the sensor cannot resolve; on the 10-bit ADC's 120 um steps both lanes track at a
-  tenth of a step in Case 3's slow first window).
+  RMSTE at most MFAC's in every window, or level within 0.1 % (MFAC_SLACK: two lanes held at
+  the same input limit, where the reference is out of reach).
 
     .venv/bin/python -m pytest -q hil/tests/test_rig_variants.py
 """
@@ -40,7 +38,6 @@ from hil.reference import reference_function
 
 VARIANTS = sorted(p.stem for p in (Path(scn.__file__).parent / "scenarios/variants").glob("*.toml"))
 MFAC_SLACK = 1.001  # at most MFAC's RMSTE in every window, level within 0.1 % (docs/hil.md)
-LEVEL_SENSOR_STEPS = 0.01  # or level within this part of the sensor's step (adc.gain_cm_per_count)
 JOBS = 2
 
 pytestmark = pytest.mark.slow
@@ -106,21 +103,8 @@ def test_guarantee_holds_where_feasible_or_its_loss_is_flagged(variant_runs, nam
         assert c["funnel_wide_at_s"] is not None or c["fallback_at_s"] is not None
 
 
-def sensor_step_cm(name: str) -> float:
-    """The variant rig's position step: one ADC count [cm] (its wiring's adc.gain_cm_per_count)."""
-    return abs(scn.load(f"variants/{name}").rig_params().firmware_scaling()["adc.gain_cm_per_count"])
-
-
 @pytest.mark.parametrize("name", VARIANTS)
 def test_paper_controller_tracks_at_least_as_well_as_mfac(variant_runs, name):
     _, s = variant_runs[name]
-    tie_cm = LEVEL_SENSOR_STEPS * sensor_step_cm(name)
     for w, ppc, mfac in zip(s["windows"], s["rmste"]["ppc"], s["rmste"]["mfac"]):
-        assert ppc <= max(MFAC_SLACK * mfac, mfac + tie_cm), f"{name} {w}: ppc {ppc:.6f} cm, mfac {mfac:.6f} cm"
-
-
-def test_the_sensor_step_is_the_wirings():
-    """The tie above is a hundredth of one ADC count: 10 cm over the 4-20 mA range of a 12-bit
-    ADC is about 30 um a count, a 10-bit ADC's about 120 um."""
-    assert 25e-4 < sensor_step_cm("case3_light_load") < 35e-4
-    assert sensor_step_cm("case3_coarse_sensor") == pytest.approx(4.0 * sensor_step_cm("case3_light_load"), rel=0.01)
+        assert ppc <= MFAC_SLACK * mfac, f"{name} {w}: ppc {ppc:.6f} cm, mfac {mfac:.6f} cm"
