@@ -20,7 +20,7 @@
  *   Q16:   alpha within 1.5e-5 (pma_q30_cos_pi: abs error < 1e-5, halved, plus argument
  *          rounding; exactly 1 from t_u on), half an LSB (2^-17) per rounding to Q16.16,
  *          1e-6 relative for converted constants, tan within 4e-6 relative
- *          (pma_q16_tan_halfpi: g(r^2) within 1.4e-6), a clamped r within 2^-28.
+ *          (pma_q16_tan_halfpi: g(r^2) within 1.6e-6), a clamped r within 2^-28.
  *          Floor: 1e-4 relative + 4 LSB (6.1e-5) absolute, and for u additionally
  *          U_SPAN_FRAC_Q16 = 0.1 % of (u_max - u_min) (0.8 kPa for [-400, 400]): the
  *          actuator resolution the Q16 variant must meet.
