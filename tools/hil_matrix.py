@@ -6,6 +6,7 @@
     .venv/bin/python tools/hil_matrix.py --matrix seven --jobs 2          # one table, printed
     .venv/bin/python tools/hil_matrix.py --matrix variants --jobs 2       # the shipped variant files
     .venv/bin/python tools/hil_matrix.py --matrix ten --out build/matrix  # and each run's summary
+    .venv/bin/python tools/hil_matrix.py --matrix audit2 --jobs 2       # the second audit's eight rigs
 
 Each run is `python -m hil offline TASK --commission --controller ppc --controller mfac --brief
 --rig PATH=VALUE ... --json FILE` (the firmware offline, both lanes commissioned on that rig over
@@ -94,7 +95,37 @@ TEN = (
         "load.mass_kg=1.3 drift.temp_rate_k_per_s=0.3 drift.temp_max_rise_k=30 sensor.adc_bits=11 "
         "sensor.noise_cm=0.002 valve.p_band_kpa=20"),
 )
-MATRICES = {"seven": (SEVEN, True), "eight": (EIGHT, True), "ten": (TEN, False)}   # (rigs, case3 --quick)
+# docs/hil.md, "A second audit": eight more, chosen the same way after the dead-band lag rule
+AUDIT2 = (
+    Rig("NA: heavy, 12 N pull, spring +20 %, 10-bit", "nominal",
+        "load.mass_kg=3.2 load.bias_force_n=12 muscle.stiffness_scale=1.2 sensor.adc_bits=10 "
+        "regulator.dead_time_s=0.008"),
+    Rig("NB: light, spring -20 %, hysteresis, long tubing", "nominal",
+        "load.mass_kg=1.8 muscle.stiffness_scale=0.8 muscle.hyst_force_n=50 regulator.tau_s=0.045 "
+        "regulator.dead_time_s=0.02 sensor.noise_cm=0.0008"),
+    Rig("NC: creep, warming, regulator errors, 11-bit, 10 N push", "nominal",
+        "creep.frac_contract=0.12 creep.frac_relax=0.2 creep.tau_contract_s=3.0 drift.temp_rate_k_per_s=0.05 "
+        "drift.temp_max_rise_k=20 regulator.hysteresis_frac_fs=0.01 regulator.linearity_frac_fs=-0.015 "
+        "sensor.adc_bits=11 sensor.adc_noise_counts=0.8 load.bias_force_n=-10 muscle.stiffness_scale=1.08"),
+    Rig("MA: `mas10`, heavy, 8 N pull, spring +20 %, faster valve", "mas10-itv2050",
+        "load.mass_kg=3.8 load.bias_force_n=8 muscle.stiffness_scale=1.2 valve.fill_rate_kpa_s=7500 "
+        "valve.exhaust_rate_kpa_s=7000 valve.dead_time_rise_s=0.015 valve.dead_time_fall_s=0.025"),
+    Rig("MB: `mas10`, light, spring -22 %, slow exhaust, 10-bit", "mas10-itv2050",
+        "load.mass_kg=1.9 muscle.stiffness_scale=0.78 valve.exhaust_rate_kpa_s=3000 valve.dead_time_fall_s=0.06 "
+        "valve.slow_weight_fall=0.4 sensor.adc_bits=10 sensor.noise_cm=0.0008"),
+    Rig("MC: `mas10`, 7 bar supply, warming, hysteresis, 20 N pull, noisy", "mas10-itv2050",
+        "valve.supply_kpa=700 drift.temp_rate_k_per_s=0.1 drift.temp_max_rise_k=15 muscle.hyst_force_n=24 "
+        "creep.tau_contract_s=8 creep.tau_relax_s=4.5 load.bias_force_n=20 sensor.noise_cm=0.0018"),
+    Rig("DA: `dmsp10`, heavier, spring +10 %, 11-bit noisy, shorter valve waits", "dmsp10",
+        "load.mass_kg=2.8 muscle.stiffness_scale=1.1 sensor.adc_bits=11 sensor.noise_cm=0.0015 "
+        "valve.dead_time_rise_s=0.025 valve.dead_time_fall_s=0.05 load.bias_force_n=-126"),
+    Rig("DB: `dmsp10`, light, spring -20 %, creep, warming, slow rise", "dmsp10",
+        "load.mass_kg=1.4 muscle.stiffness_scale=0.8 creep.frac_contract=0.2 creep.frac_relax=0.33 "
+        "drift.temp_rate_k_per_s=0.08 drift.temp_max_rise_k=20 valve.slow_weight_rise=0.2 load.bias_force_n=-156 "
+        "sensor.adc_noise_counts=0.7"),
+)
+MATRICES = {"seven": (SEVEN, True), "eight": (EIGHT, True), "ten": (TEN, False),
+            "audit2": (AUDIT2, False)}   # (rigs, case3 --quick)
 
 
 def task_file(profile: str, task: str) -> str:
