@@ -10,7 +10,8 @@ The model the rules use is the one a step response shows on any such rig: around
 point the position follows the pressure like a first-order lag with a dead time (FOPDT),
 x(s) / p(s) = g e^{-theta s} / (tau s + 1), with g in cm/kPa, fitted by the two-point method
 (the times to 35.3 % and 85.3 % of the step), or, where a slow tail stretches that fit, the lag of
-the response's early part; the loop's FOPDT takes the median lag and the median of the steps'
+the response's early part (a step into the dead band, which moved too little to read a lag from,
+takes the steps that moved); the loop's FOPDT takes the median lag and the median of the steps'
 slopes g / tau (MFAC the median gain). The loop is then shaped by the SIMC rule
 (Skogestad 2003) with the closed-loop time constant tau_c the tightest in TAU_C_PER_THETA_MIN..MAX x
 theta_eff whose loop as built (with the observer below) keeps PM_MIN_DEG and GM_MIN on the measured
