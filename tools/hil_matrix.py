@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import Any
 
 ROOT = Path(__file__).resolve().parent.parent
+LEVEL = 1.001   # worst PPC / MFAC RMSTE still counted level: within 0.1 % (docs/hil.md, the variant test)
 TASKS = ("case1", "case2a", "case2b", "case3", "constraint_approach", "load_change")
 
 
@@ -192,7 +193,7 @@ def main() -> int:
     ahead = 0
     for (label, task, _), s in zip(jobs, summaries):
         line, worst = row(label, task, s)
-        ahead += worst <= 1.001
+        ahead += worst <= LEVEL
         print(line)
     print(f"\n{ahead} of {len(jobs)} runs with the paper's controller ahead of MFAC or level (0.1 %) in every window"
           f" (summaries: {out})")

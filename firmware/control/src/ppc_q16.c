@@ -118,6 +118,13 @@ static pma_q30_t tuning_alpha(const pma_ppc_q16_t *s, pma_q16_t t)
     return pma_q30_sin2_halfpi(pma_umul_shift((uint32_t)t, (uint32_t)s->inv_t_u_q24, 10));   /* 15 */
 }
 
+/* alpha a with 24 fractional bits (int64) for a in Q16.16 and alpha in Q2.30; from t_u on
+ * alpha is 1 and the product is a shifted, the same bits without the multiply */
+static inline int64_t times_alpha_q24(pma_q16_t a, pma_q30_t alpha)
+{
+    return alpha == PMA_Q30_ONE ? (int64_t)a * 256 : pma_rshift_round(pma_mul32(a, alpha), 22);
+}
+
 /* Funnel scale g_i at t, Q2.30 (ppc.h, "Funnel widening") of a channel wider than assigned:
  * g = 1 - (1 - k)(1 - alpha(t - t_i)), the tuning function from the widening on; t_u after it
  * the funnel is as assigned again (the step's common case again). */
@@ -214,10 +221,7 @@ int pma_ppc_step_ext_q16(pma_ppc_q16_t *s, pma_q16_t t_s, pma_q16_t x_cm, pma_q1
     pma_q16_t sec2;
     o->alpha = tuning_alpha(s, t_s);
     o->e_cm = pma_q16_ssub(x_cm, xr_cm);                                        /* 8 */
-    /* from t_u on alpha is 1: alpha e in Q24 is e shifted, exactly the product's bits */
-    const int full = o->alpha == PMA_Q30_ONE;
-    const int64_t lambda1_q24 = full ? (int64_t)o->e_cm * 256
-                                     : pma_rshift_round(pma_mul32(o->e_cm, o->alpha), 22);   /* 16 */
+    const int64_t lambda1_q24 = times_alpha_q24(o->e_cm, o->alpha);               /* 16 */
     o->lambda1_cm = pma_q16_sat64(pma_rshift_round(lambda1_q24, 8));
     /* channel 0's step changes only bit 0 of widen_bits: the copy serves both channels */
     const uint32_t widen_bits = s->widen_bits;
@@ -226,9 +230,7 @@ int pma_ppc_step_ext_q16(pma_ppc_q16_t *s, pma_q16_t t_s, pma_q16_t x_cm, pma_q1
     o->chi = transform(s, r1, &sec2, &o->flags, PMA_PPC_FLAG_SOFT1);              /* 18 */
     const int64_t theta_q24 = -pma_rshift_round(pma_mul32(s->a, o->chi), 8);      /* 17 */
     o->theta_cm_s = pma_q16_sat64(pma_rshift_round(theta_q24, 8));
-    const int64_t lambda2_q24 =
-        (full ? (int64_t)v_cm_s * 256 : pma_rshift_round(pma_mul32(v_cm_s, o->alpha), 22)) -
-        theta_q24;                                                                 /* 19 */
+    const int64_t lambda2_q24 = times_alpha_q24(v_cm_s, o->alpha) - theta_q24;     /* 19 */
     o->lambda2_cm_s = pma_q16_sat64(pma_rshift_round(lambda2_q24, 8));
     const pma_q30_t r2 = channel_r(s, widen_bits, 1, t_s, lambda2_q24, s->inv_w2_q24,
                                    raw_r(lambda2_q24, s->inv_w2_q24), &o->g2, &o->flags);

@@ -451,10 +451,10 @@ def derive(m: Measured, task: Task) -> Derivation:
     # a step that moved less than MOVED_SIGMAS noise deviations (into the hysteresis' dead band) has a
     # gain but no lag to read: its fit is of the noise, often a lag of a sample or two, whose slope
     # g / tau would pass for the fastest step of all. It takes the lag of the steps that moved
-    moved = [lag for s, lag in zip(m.steps, lags) if math.isfinite(s.first_move_s)]
-    if moved:
-        lag_moved = float(np.median(moved))
-        lags = [lag if math.isfinite(s.first_move_s) else lag_moved for s, lag in zip(m.steps, lags)]
+    moving_lags = [lag for s, lag in zip(m.steps, lags) if math.isfinite(s.first_move_s)]
+    if moving_lags:
+        lag_moving = float(np.median(moving_lags))
+        lags = [lag if math.isfinite(s.first_move_s) else lag_moving for s, lag in zip(m.steps, lags)]
     tau = float(np.median(lags))
     tau_fit = float(np.median([s.tau_s for s in m.steps]))
     # the gain the law's loop is shaped on: the median of the steps' slopes g / tau (what its
