@@ -212,9 +212,12 @@ def main() -> int:
     if app:
         say("## Cost of a whole tick of the application (bench_app_tick)\n")
         say("pma_app_step on the fake HAL (its own work is small: an ADC read about 30 instructions, "
-            "a DAC write about 40), RUNNING a HOLD: sample and scaling, estimator, controller, "
-            "supervisor, actuator and DAC, heartbeat and telemetry at their decimation. Instructions "
-            "per tick (QEMU -icount); the arithmetic is the controller slot's.\n")
+            "a DAC write about 40), RUNNING a HOLD with the sensor's counts alternating by one count "
+            "from tick to tick (a still sample would let the law's input settle and skip MFAC's "
+            "divisions: the cheapest tick, not the one a budget needs): sample and scaling, "
+            "estimator, controller, supervisor, actuator and DAC, heartbeat and telemetry at their "
+            "decimation. Instructions per tick (QEMU -icount); the arithmetic is the controller "
+            "slot's.\n")
         got_ticks = {p: app_tick_lines(p) for p in app}
         ticks = {p: t for p, (t, _) in got_ticks.items()}
         cases = list(dict.fromkeys(n.split("(", 1)[1] for p in app for n in ticks[p]))

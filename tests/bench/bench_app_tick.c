@@ -7,9 +7,12 @@
  * bench` QEMU runs with -icount shift=0, so the figures are instruction counts;
  * on the host, wall-clock ns. Prints figures, never asserts.
  *
- * The node RUNS a HOLD at -1.5 cm with the sensor at -1.52 cm (within w1): the
- * controller works in its linear region, nothing saturates or faults; the host
- * heartbeat check is off (no host here). Each figure is (N ticks - N passes of
+ * The node RUNS a HOLD at -1.5 cm with the sensor at -1.52 cm (within w1), its
+ * counts dithering by one count from tick to tick as a real sensor's do: the
+ * controller works in its linear region and takes its general path on every
+ * tick (a sample that never changes would let the law's input settle, and
+ * MFAC's estimator, which PPC runs beside its law, skip its divisions);
+ * nothing saturates or faults; the host heartbeat check is off (no host here). Each figure is (N ticks - N passes of
  * the same loop without the tick) / N; the frames the tick queued are popped in
  * both, so the fake CAN's bookkeeping is not counted. */
 #include <stdint.h>
@@ -27,6 +30,7 @@
 #define N 2048u
 
 static pma_app_t app;
+static uint16_t sensor_counts;   /* the sample at -1.52 cm; the ticks alternate it with one more */
 static volatile uint32_t sink;
 
 #if PMA_CTRL_Q16
@@ -68,9 +72,8 @@ static const char *start(uint32_t mode, float t_u_s)
     pma_params_defaults(&app.params);
     pma_adc_scaling_t s;
     pma_app_adc_scaling(&app.params, &s);   /* the application's own builder */
-    uint16_t raw = 0;
-    if (pma_adc_cm_to_counts(&s, -1.52f, &raw) != PMA_OK) return "sensor counts";
-    pma_fake_adc_set(raw);
+    if (pma_adc_cm_to_counts(&s, -1.52f, &sensor_counts) != PMA_OK) return "sensor counts";
+    pma_fake_adc_set(sensor_counts);
     if (pma_app_init(&app, &plat) != PMA_OK) return "app init";
     int rc = set_u32(PMA_PARAM_CTRL_MODE, mode);
     if (rc == PMA_OK) rc = set_u32(PMA_PARAM_REF_KIND, PMA_REF_KIND_HOLD);
@@ -96,10 +99,14 @@ static void bench(const char *what, uint32_t mode, float t_u_s)
     }
     uint32_t frames = 0;
     pma_board_timer_start();
-    for (uint32_t k = 0; k < N; ++k) frames += drain();
+    for (uint32_t k = 0; k < N; ++k) {
+        pma_fake_adc_set((uint16_t)(sensor_counts + (k & 1u)));
+        frames += drain();
+    }
     const uint32_t empty = pma_board_timer_elapsed_ns();
     pma_board_timer_start();
     for (uint32_t k = 0; k < N; ++k) {
+        pma_fake_adc_set((uint16_t)(sensor_counts + (k & 1u)));
         (void)pma_app_step(&app);
         frames += drain();
     }

@@ -49,6 +49,63 @@ static void test_sdiv(void)
     TEST_ASSERT_EQUAL_INT(PMA_Q16_MAX, pma_q16_sdiv(PMA_Q16_MIN, -PMA_Q16_ONE));
 }
 
+/* pma_udiv64_q32 against the 64 / 64 division of the C library (on ARMv6-M its own steps): random operands of every
+ * bit length (both below and above 2^32 for the divisor), the quotients at 2^32 - 1 and 2^32,
+ * and the edges of the operands' ranges. */
+static uint32_t udiv_by_definition(uint64_t n, uint64_t d)
+{
+    const uint64_t q = n / d;
+    return q > UINT32_MAX ? UINT32_MAX : (uint32_t)q;
+}
+
+static uint64_t next64(uint64_t *s)   /* xorshift64 */
+{
+    *s ^= *s << 13;
+    *s ^= *s >> 7;
+    *s ^= *s << 17;
+    return *s;
+}
+
+static void check_udiv(uint64_t n, uint64_t d)
+{
+    const uint64_t q = pma_udiv64_q32(n, d);
+    const uint32_t got = q > UINT32_MAX ? UINT32_MAX : (uint32_t)q, want = udiv_by_definition(n, d);
+    if (got != want) {
+        pma_test_fail("pma_udiv64_q32(0x%08lx%08lx, 0x%08lx%08lx) = %lu, want %lu",
+                      (unsigned long)(n >> 32), (unsigned long)(n & 0xFFFFFFFFu), (unsigned long)(d >> 32),
+                      (unsigned long)(d & 0xFFFFFFFFu), (unsigned long)got, (unsigned long)want);
+    }
+}
+
+static void test_udiv64_q32_is_exact(void)
+{
+    uint64_t s = 0x9E3779B97F4A7C15u;
+    for (unsigned dbits = 1; dbits <= 64; ++dbits) {
+        for (int i = 0; i < 48; ++i) {
+            uint64_t d = next64(&s) >> (64u - dbits);
+            if (d == 0u) d = 1u;
+            /* a dividend whose quotient has 0..33 bits: most below the saturation */
+            const unsigned qbits = (unsigned)(next64(&s) % 34u);
+            const unsigned nbits = dbits + qbits > 64u ? 64u : dbits + qbits;
+            check_udiv(next64(&s) >> (64u - nbits), d);
+            /* quotient exactly 2^32 - 1 and 2^32 (plus a remainder), where d allows it */
+            if (dbits <= 32u) {
+                const uint64_t top = (uint64_t)UINT32_MAX * d;
+                check_udiv(top, d);
+                check_udiv(top + (d - 1u), d);
+                check_udiv(top + d, d);
+            }
+        }
+    }
+    const uint64_t edges[] = {0u, 1u, 2u, 0x7FFFFFFFu, 0x80000000u, 0xFFFFFFFFu, 0x100000000u, 0x100000001u,
+                              0x7FFFFFFFFFFFFFFFu, 0x8000000000000000u, 0xFFFFFFFFFFFFFFFEu, UINT64_MAX};
+    for (size_t i = 0; i < sizeof edges / sizeof edges[0]; ++i) {
+        for (size_t j = 0; j < sizeof edges / sizeof edges[0]; ++j) {
+            if (edges[j] != 0u) check_udiv(edges[i], edges[j]);
+        }
+    }
+}
+
 static void test_conversions(void)
 {
     TEST_ASSERT_EQUAL_INT(0, pma_q16_from_f32(NAN));
@@ -208,6 +265,7 @@ int main(void)
     RUN_TEST(test_sadd_ssub_saturate);
     RUN_TEST(test_smul_rounds_and_saturates);
     RUN_TEST(test_sdiv);
+    RUN_TEST(test_udiv64_q32_is_exact);
     RUN_TEST(test_conversions);
     RUN_TEST(test_conversions_match_their_definitions);
     RUN_TEST(test_tan_halfpi_accuracy);

@@ -8,6 +8,65 @@
 #include <math.h>
 #include <string.h>
 
+#if defined(__ARM_ARCH_6M__)
+/* floor((nhi 2^32 + nlo) / d) for nhi < d (the quotient fits 32 bits): 32 restoring steps,
+ * unrolled. The dividend's low word shifts left through the remainder r (< d) and takes the
+ * quotient bits in its freed low bit. 2r + 1 can pass 2^32 only when d > 2^31; then the carry
+ * says r >= d and the wrapped subtraction is still exact. About six instructions a bit
+ * (divided syntax, as in udiv_q16 below). Not inlined: the unrolled steps (450 bytes) would
+ * put a caller's branches out of Thumb-1 range. */
+__attribute__((noinline)) static uint32_t udiv64_32(uint32_t nhi, uint32_t nlo, uint32_t d)
+{
+    uint32_t r = nhi, q = nlo;
+    __asm__(".rept 32\n\t"
+            "lsl %[q], %[q], #1\n\t"
+            "adc %[r], %[r]\n\t"
+            "bcs 2f\n\t"
+            "cmp %[r], %[d]\n\t"
+            "bcc 1f\n"
+            "2:\n\t"
+            "sub %[r], %[r], %[d]\n\t"
+            "add %[q], %[q], #1\n"
+            "1:\n\t"
+            ".endr"
+            : [r] "+l"(r), [q] "+l"(q)
+            : [d] "l"(d)
+            : "cc");
+    return q;
+}
+
+/* a b, exact, from the partial products (gcc would call the 64 x 64 multiply) */
+static inline uint64_t umul64(uint32_t a, uint32_t b)
+{
+    uint32_t hi;
+    const uint32_t lo = pma_umul32_v6m(a, b, &hi);
+    return ((uint64_t)hi << 32) | lo;
+}
+
+/* Hacker's Delight's divdu: for d >= 2^32, the quotient of n / 2 by d's top 32 bits
+ * (normalised) is within one of floor(n / d) after the shift back, from above; one product
+ * and compare settle it. tests/unit/test_fixed.c checks it against the library's division
+ * under QEMU. */
+uint64_t pma_udiv64_q32(uint64_t n, uint64_t d)
+{
+    const uint32_t dhi = (uint32_t)(d >> 32), dlo = (uint32_t)d;
+    const uint32_t nhi = (uint32_t)(n >> 32), nlo = (uint32_t)n;
+    if (dhi == 0u) {
+        if (nhi >= dlo) return UINT32_MAX;     /* quotient >= 2^32 (and d = 0) */
+        return udiv64_32(nhi, nlo, dlo);
+    }
+    const unsigned z = (unsigned)__builtin_clz(dhi);                       /* 0..31 */
+    const uint32_t v1 = (uint32_t)((d << z) >> 32);                        /* >= 2^31 */
+    const uint64_t half = n >> 1;                                          /* < 2^63 */
+    const uint32_t q1 = udiv64_32((uint32_t)(half >> 32), (uint32_t)half, v1);
+    uint32_t q = q1 >> (31u - z);
+    if (q != 0u) q--;                          /* now q <= floor(n / d): q d <= n */
+    const uint64_t qd = umul64(q, dlo) + ((uint64_t)(q * dhi) << 32);
+    if (n - qd >= d) q++;
+    return q;
+}
+#endif
+
 pma_q16_t pma_q16_sdiv(pma_q16_t a, pma_q16_t b)
 {
     const int neg = (a < 0) != (b < 0);
@@ -17,7 +76,7 @@ pma_q16_t pma_q16_sdiv(pma_q16_t a, pma_q16_t b)
         if (ua == 0u) return 0;
         return (a < 0) ? PMA_Q16_MIN : PMA_Q16_MAX;
     }
-    const uint64_t q = ((ua << 16) + ub / 2u) / ub;
+    const uint64_t q = pma_udiv64_q32((ua << 16) + ub / 2u, ub);
     if (neg) {
         return q > (uint64_t)INT32_MAX + 1u ? PMA_Q16_MIN : (pma_q16_t)(-(int64_t)q);
     }

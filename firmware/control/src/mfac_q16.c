@@ -24,10 +24,10 @@ static int32_t div_q32(int64_t num, int64_t den, unsigned frac)
     const uint64_t ud = (uint64_t)den;
     uint64_t q;
     if (un < ((uint64_t)1 << (62u - frac))) {
-        q = ((un << frac) + ud / 2u) / ud;
+        q = pma_udiv64_q32((un << frac) + ud / 2u, ud);
     } else {
         const uint64_t dn = ud >> frac;
-        q = (dn == 0u) ? UINT64_MAX : (un + dn / 2u) / dn;
+        q = (dn == 0u) ? UINT64_MAX : pma_udiv64_q32(un + dn / 2u, dn);
     }
     if (q > (uint64_t)INT32_MAX) return neg ? INT32_MIN : INT32_MAX;
     return neg ? -(int32_t)q : (int32_t)q;
@@ -83,6 +83,11 @@ static inline int32_t estimate(const pma_mfac_q16_t *s, pma_q16_t y_cm, uint32_t
     const pma_q16_t y1 = (s->k == 0) ? y_cm : s->y1;
     const pma_q16_t du = pma_q16_ssub(s->u1, s->u2);
     const pma_q16_t dy = pma_q16_ssub(y_cm, y1);
+    const pma_q16_t adu = du < 0 ? pma_q16_sneg(du) : du;
+    if (adu <= s->eps) {               /* the reset rule's first test, before the work it voids */
+        *flags |= PMA_MFAC_FLAG_RESET;
+        return s->phi1_q24;
+    }
     /* phi += eta du / (mu + du^2) (dy - phi du) */
     /* k1 = eta du / (mu + du^2) <= eta / (2 sqrt(mu)) < 32 (mu >= 1/1024): Q8.24
      * keeps it precise, since it multiplies innovations of tens of cm */
@@ -99,9 +104,8 @@ static inline int32_t estimate(const pma_mfac_q16_t *s, pma_q16_t y_cm, uint32_t
     }
     int32_t phi = pma_q16_sat64((int64_t)s->phi_q24 + dphi_q24);   /* Q8.24, saturated */
     const int32_t aphi = phi < 0 ? (phi == INT32_MIN ? INT32_MAX : -phi) : phi;
-    const pma_q16_t adu = du < 0 ? pma_q16_sneg(du) : du;
     const int sign_flip = (s->phi1_q24 > 0) ? !(phi > 0) : !(phi < 0);
-    if (aphi <= s->eps_q24 || adu <= s->eps || sign_flip) {
+    if (aphi <= s->eps_q24 || sign_flip) {
         phi = s->phi1_q24;
         *flags |= PMA_MFAC_FLAG_RESET;
     }

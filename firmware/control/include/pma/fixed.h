@@ -162,6 +162,21 @@ static inline pma_q16_t pma_q16_clamp(pma_q16_t a, pma_q16_t lo, pma_q16_t hi)
 /* a / b, rounded, saturating; b = 0 gives the limit with a's sign (0/0 = 0). */
 pma_q16_t pma_q16_sdiv(pma_q16_t a, pma_q16_t b);
 
+/* floor(n / d) for d > 0, exact where it is below 2^32; a quotient of 2^32 or more comes back
+ * as some value >= 2^32 - 1 (the callers saturate): the 64-bit quotients of the *_q16 modules
+ * (MFAC's gains, pma_q16_sdiv). On ARMv6-M without the generic 64 / 64 library division
+ * (about 350 instructions there): one 64 / 32 division by a normalised divisor, and a
+ * correction step when d >= 2^32 (fixed.c; it returns 2^32 - 1 for the large quotients).
+ * Elsewhere the library's division, which a divide instruction makes the faster. */
+#if defined(__ARM_ARCH_6M__)
+uint64_t pma_udiv64_q32(uint64_t n, uint64_t d);
+#else
+static inline uint64_t pma_udiv64_q32(uint64_t n, uint64_t d)
+{
+    return n / d;
+}
+#endif
+
 /* Conversions for configuration and tests (not for the control tick).
  * from_f32 saturates; NaN converts to 0. */
 pma_q16_t pma_q16_from_f32(float x);
