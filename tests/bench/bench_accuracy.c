@@ -46,9 +46,10 @@ static void ppc(void)
             const golden_ppc_row_t *r = &set->rows[k];
             float u;
             pma_q16_t uq;
-            pma_ppc_step_f32(&pf, r->t_s, r->x_cm, r->v_cm_s, r->xr_cm, &u);
-            pma_ppc_step_q16(&pq, pma_q16_from_f32(r->t_s), pma_q16_from_f32(r->x_cm),
-                             pma_q16_from_f32(r->v_cm_s), pma_q16_from_f32(r->xr_cm), &uq);
+            pma_ppc_step_ext_f32(&pf, r->t_s, r->x_cm, r->v_cm_s, r->xr_cm, r->u_ext, &u);
+            pma_ppc_step_ext_q16(&pq, pma_q16_from_f32(r->t_s), pma_q16_from_f32(r->x_cm),
+                                 pma_q16_from_f32(r->v_cm_s), pma_q16_from_f32(r->xr_cm),
+                                 pma_q16_from_f32(r->u_ext), &uq);
             add(&f, u, r->u, range);
             add(&q, pma_q16_to_f32(uq), r->u, range);
         }

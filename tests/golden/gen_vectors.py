@@ -144,16 +144,60 @@ Q16_R_CLAMPED = 2.0 ** -28  # r clamped to r_max: only r_max's representation
 SCREEN_FACTOR = 4.0        # decisions must be this many model-errors away from thresholds
 
 
+Q24_HALF = 2.0 ** -25      # 1/w_i g_i of a widened funnel rounded to Q8.24
+Q30_HALF = 2.0 ** -31      # a scale g_i rounded to Q2.30
+
+
 @dataclass
 class PpcTol:
     r1: float
     r2: float
     u_law: float
+    pre: tuple[float, float] = (0.0, 0.0)     # |r_i| before the widening decision
+    rel_k: tuple[float, float] = (0.0, 0.0)   # relative error of a scale set in this row
+
+
+@dataclass
+class Funnels:
+    """Per channel: the scale k_i of its last widening and the relative error bound of its
+    Q16.16 value (the state the error model needs across rows)."""
+    k: list[float]
+    rel_k: list[float]
+
+
+def scale_error(g: float, k: float, rel_k: float) -> float:
+    """Abs error of a funnel scale g = 1 - (1 - k)(1 - alpha(t - t_i)) in Q16.16 (Q2.30): k's
+    own error through dg/dk = (1 - g) / (1 - k), alpha's, and g's rounding."""
+    if g >= 1.0:
+        return 0.0
+    return (1.0 - g) / (1.0 - k) * k * rel_k + (1.0 - k) * Q16_ALPHA_ABS + Q30_HALF
+
+
+def channel_error(tol_raw: float, raw: float, lam: float, g: float, pre: float, widened: bool,
+                  w: float, fun: Funnels, i: int) -> tuple[float, float, float, float]:
+    """(abs error of r_i unclamped, of the pre-decision |r_i|, of g_i, relative error of a new
+    k_i) for channel i. A widening sets k_i = widen_r / |raw_i| (the scale before it cancels);
+    its Q16.16 value carries raw's error, the Q8.24 rounding of 1/w g and its own rounding."""
+    g_pre = pre / abs(raw) if raw != 0.0 else 1.0
+    tol_gpre = scale_error(g_pre, fun.k[i], fun.rel_k[i])
+    tol_pre = g_pre * tol_raw + abs(raw) * tol_gpre + (abs(lam) * Q24_HALF if g_pre < 1.0 else 0.0)
+    rel_new = 0.0
+    if widened:
+        rel_new = tol_raw / abs(raw) + Q24_HALF * w / g + Q30_HALF / g + Q16_REL
+        tol_g = g * rel_new
+    else:
+        tol_g = scale_error(g, fun.k[i], fun.rel_k[i])
+    tol_r = g * tol_raw
+    if g < 1.0:        # the funnel as assigned: raw's error alone (the paper's law)
+        tol_r += abs(raw) * tol_g + abs(lam) * Q24_HALF + Q16_REL * abs(raw * g)
+    return tol_r, tol_pre, tol_g, rel_new
 
 
 def ppc_q16_error(cfg: ref.PpcConfig, tr: ref.TanTransform, v: float,
-                  o: ref.PpcOutput) -> PpcTol:
-    """Estimated abs error of the Q16.16 variant on r1, r2 and u_law for this row."""
+                  o: ref.PpcOutput, fun: Funnels | None = None) -> PpcTol:
+    """Estimated abs error of the Q16.16 variant on r1, r2 and u_law for this row (fun: the
+    funnels' state before the row, with widening)."""
+    fun = fun or Funnels([1.0, 1.0], [0.0, 0.0])
     half = 0.5 * LSB                    # one rounding of a product to Q16.16
     # alpha is exactly 1 from t_u on (no cos evaluated)
     tol_alpha = 0.0 if o.alpha == 1.0 else Q16_ALPHA_ABS
@@ -164,23 +208,31 @@ def ppc_q16_error(cfg: ref.PpcConfig, tr: ref.TanTransform, v: float,
     c2 = o.flags & ref.PPC_FLAG_BARRIER2
     s1 = o.flags & ref.PPC_FLAG_SOFT1
     s2 = o.flags & ref.PPC_FLAG_SOFT2
-    tol_r1 = Q16_R_CLAMPED if c1 else tol_l1 / cfg.w1_cm + Q16_REL * abs(o.r1)
+    tol_raw1 = tol_l1 / cfg.w1_cm + Q16_REL * abs(o.raw1)
+    cr1, pre1, _, rel1 = channel_error(tol_raw1, o.raw1, o.lambda1_cm, o.g1, o.pre1,
+                                       bool(o.flags & ref.PPC_FLAG_WIDEN1), cfg.w1_cm, fun, 0)
+    tol_r1 = Q16_R_CLAMPED if c1 else cr1
     sec1 = tr.soft_sec2 if s1 else 1.0 + o.chi ** 2
     tol_chi = Q16_TAN_REL * abs(o.chi) + 0.5 * math.pi * sec1 * tol_r1 + nz(o.chi)
     tol_theta = cfg.a_cm_s * tol_chi + Q16_REL * abs(o.theta_cm_s) + nz(o.theta_cm_s)
     tol_l2 = (abs(v) * tol_alpha + tol_theta
               + Q16_REL * (abs(o.alpha * v) + abs(o.theta_cm_s)) + half)
-    tol_r2 = Q16_R_CLAMPED if c2 else tol_l2 / cfg.w2_cm_s + Q16_REL * abs(o.r2)
+    tol_raw2 = tol_l2 / cfg.w2_cm_s + Q16_REL * abs(o.raw2)
+    cr2, pre2, tol_g2, rel2 = channel_error(tol_raw2, o.raw2, o.lambda2_cm_s, o.g2, o.pre2,
+                                            bool(o.flags & ref.PPC_FLAG_WIDEN2), cfg.w2_cm_s, fun, 1)
+    tol_r2 = Q16_R_CLAMPED if c2 else cr2
     sec2 = tr.soft_sec2 if s2 else 1.0 + o.delta ** 2
     tol_delta = Q16_TAN_REL * abs(o.delta) + 0.5 * math.pi * sec2 * tol_r2 + half
+    # beta = sec^2 g2 / w2: the widened funnel's 1/w2 g2 in Q8.24
+    tol_w = tol_g2 / cfg.w2_cm_s + (Q24_HALF if o.g2 < 1.0 else 0.0)
     if s2:
-        tol_beta = Q16_REL * o.beta_s_cm + half
+        tol_beta = Q16_REL * o.beta_s_cm + sec2 * tol_w + half
     else:
-        tol_beta = (2.0 * abs(o.delta) * tol_delta / cfg.w2_cm_s
+        tol_beta = (2.0 * abs(o.delta) * tol_delta * o.g2 / cfg.w2_cm_s + sec2 * tol_w
                     + (Q16_REL + 2 * Q16_TAN_REL) * o.beta_s_cm + half)
     tol_ulaw = (cfg.c * (o.beta_s_cm * tol_delta + abs(o.delta) * tol_beta)
                 + Q16_REL * abs(o.u_law) + LSB)
-    return PpcTol(r1=tol_r1, r2=tol_r2, u_law=tol_ulaw)
+    return PpcTol(r1=tol_r1, r2=tol_r2, u_law=tol_ulaw, pre=(pre1, pre2), rel_k=(rel1, rel2))
 
 
 @dataclass
@@ -190,6 +242,7 @@ class PpcRow:
     v: float
     xr: float
     out: ref.PpcOutput
+    u_ext: float = 0.0
 
 
 class PpcRunner:
@@ -200,18 +253,46 @@ class PpcRunner:
         self.ppc = ref.Ppc(self.cfg)
         self.rows: list[PpcRow] = []
         self.tol_uff = LSB
+        self.funnels = Funnels([1.0, 1.0], [0.0, 0.0])
 
-    def try_row(self, t: float, x: float, v: float, xr: float, exact_r: bool = False) -> bool:
+    def _state(self) -> tuple:
+        p = self.ppc
+        return (p.u_ff, p.breaches1, p.breaches2, list(p.widened), p.clamp_run2)
+
+    def _restore(self, st: tuple) -> None:
+        p = self.ppc
+        p.u_ff, p.breaches1, p.breaches2, widened, p.clamp_run2 = st
+        p.widened = list(widened)
+
+    def preview(self, t: float, x: float, v: float, xr: float, u_ext: float = 0.0) -> ref.PpcOutput:
+        """The reference's output for this row without keeping it (quantised inputs)."""
+        st = self._state()
+        o = self.ppc.step(q(t), q(x), q(v), q(xr), q(u_ext))
+        self._restore(st)
+        return o
+
+    def try_row(self, t: float, x: float, v: float, xr: float, exact_r: bool = False,
+                u_ext: float = 0.0) -> bool:
         """Quantise, run, screen. On a knife edge the state is restored and False returned."""
-        t, x, v, xr = q(t), q(x), q(v), q(xr)
+        t, x, v, xr, u_ext = q(t), q(x), q(v), q(xr), q(u_ext)
         cfg = self.cfg
-        saved = (self.ppc.u_ff, self.ppc.breaches1, self.ppc.breaches2)
-        o = self.ppc.step(t, x, v, xr)
-        tol = ppc_q16_error(cfg, self.ppc.transform, v, o)
+        saved = self._state()
+        o = self.ppc.step(t, x, v, xr, u_ext)
+        tol = ppc_q16_error(cfg, self.ppc.transform, v, o, self.funnels)
         tr = self.ppc.transform
         ok = True
         if t != 0.0 and t != cfg.t_u_s and near(t, cfg.t_u_s, 0.0):
             ok = False
+        if cfg.widen_r > 0.0:
+            for i, (dt, pre, raw) in enumerate(((o.dt1, o.pre1, o.raw1), (o.dt2, o.pre2, o.raw2))):
+                # a wide funnel's end (t - t_i = t_u), the widening decision (|r| = r_max), and
+                # scales far below the floor's resolution are knife edges
+                if dt is not None and dt > 0.0 and near(dt, cfg.t_u_s, 0.0):
+                    ok = False
+                if (i == 0 or cfg.widen2_steps > 0) and near(pre, tr.r_max, SCREEN_FACTOR * tol.pre[i]):
+                    ok = False
+                if raw != 0.0 and (o.g1, o.g2)[i] < 1e-3:
+                    ok = False
         if not exact_r:
             for r, tr_tol in ((o.r1, tol.r1), (o.r2, tol.r2)):
                 if near(abs(r), tr.r_max, SCREEN_FACTOR * tr_tol):
@@ -226,11 +307,14 @@ class PpcRunner:
         if cfg.ff_gain_per_s > 0 and o.u_law != 0.0 and abs(o.u_law) <= SCREEN_FACTOR * tol.u_law:
             ok = False
         if not ok:
-            self.ppc.u_ff, self.ppc.breaches1, self.ppc.breaches2 = saved
+            self._restore(saved)
             return False
         if cfg.ff_gain_per_s > 0 and self.ppc.u_ff != o.u_ff:
             self.tol_uff += cfg.ff_gain_per_s * cfg.period_s * tol.u_law + LSB
-        self.rows.append(PpcRow(t, x, v, xr, o))
+        for i, (flag, g) in enumerate(((ref.PPC_FLAG_WIDEN1, o.g1), (ref.PPC_FLAG_WIDEN2, o.g2))):
+            if o.flags & flag:
+                self.funnels.k[i], self.funnels.rel_k[i] = g, tol.rel_k[i]
+        self.rows.append(PpcRow(t, x, v, xr, o, u_ext))
         return True
 
 
@@ -448,6 +532,66 @@ def ppc_ff_set(name: str, doc: str, ff_gain: float, period: float, ff_init: floa
     return dict(name=name, doc=doc, cfg=run.cfg, rows=run.rows)
 
 
+def ppc_aim(run: PpcRunner, t: float, xr: float, raw1: float, r2: float,
+            u_ext: float) -> tuple[float, float]:
+    """(x, v) at time t (alpha > 0) for raw1 = lambda1 / w1 (the position funnel as assigned)
+    and r2 = lambda2 g2 / w2 in the velocity funnel of the step before it would widen (g2
+    from the reference's state; theta from a preview with v = 0, which does not depend on v)."""
+    cfg = run.cfg
+    t, xr = q(t), q(xr)
+    alpha = ref.ppc_alpha(t, cfg.t_u_s)
+    x = q(xr + raw1 * cfg.w1_cm / alpha)
+    theta = run.preview(t, x, 0.0, xr, u_ext).theta_cm_s
+    g2 = 1.0
+    last = run.ppc.widened[1]
+    if last is not None and t - last[1] < cfg.t_u_s:
+        g2 = 1.0 - (1.0 - last[0]) * (1.0 - ref.ppc_alpha(max(t - last[1], 0.0), cfg.t_u_s))
+    return x, q((r2 * cfg.w2_cm_s / g2 + theta) / alpha)
+
+
+def ppc_widen_set() -> dict:
+    """Case 3 parameters with funnel widening (widen_r 0.5, widen2_steps 3), the feedforward
+    and an added input u_ext: lambda1's funnel widens, shrinks back over t_u (WIDE) and widens
+    again from its widened state; lambda2 clamps (BARRIER2) for two steps of a run, widens on
+    the third, a run that breaks restarts; both funnels back as assigned t_u after their last
+    widening; u_ext moving the output into both limits with the feedforward's hold."""
+    cfg = ref.PpcConfig(w1_cm=0.2, t_u_s=2.0, **{**PAPER_CFG, "ff_gain_per_s": 2.0, "period_s": 0.01,
+                                                  "ff_init": 100.0, "widen_r": 0.5, "widen2_steps": 3})
+    run = PpcRunner(cfg)
+    rng = np.random.default_rng(1501)
+    ppc_add_plain(run, 0.0, -1.0, 0.0, -2.0)
+    # (t, raw1, r2 before a widening, u_ext): what each row is for, in order
+    plan = [(0.4, 0.3, 0.2, 15.0), (0.9, -0.5, -0.4, -30.0), (1.5, 0.6, 0.5, 0.0),
+            (2.5, 1.4, 0.3, 0.0),                       # lambda1 beyond: WIDEN1
+            (2.6, 1.2, -0.2, 10.0), (3.0, 0.8, 0.1, 0.0), (3.4, -1.5, 0.3, -20.0),   # WIDE
+            (3.7, 2.2, -0.3, 0.0),                      # beyond the widened funnel: WIDEN1 again
+            (4.2, 0.3, 0.4, 0.0), (5.0, -0.4, -0.5, 25.0), (5.6, 0.5, 0.2, 0.0),
+            (5.8, 0.4, 0.1, 0.0),                       # t_u after the last: as assigned
+            (6.0, 0.1, 1.3, 0.0), (6.01, 0.1, 1.4, 0.0),   # BARRIER2, BARRIER2,
+            (6.02, -0.1, -1.2, 0.0),                    # the run's third step: WIDEN2
+            (6.1, 0.2, 0.4, 0.0), (6.5, -0.2, -0.6, 0.0),
+            (7.0, 0.1, 1.1, 0.0), (7.01, 0.1, 0.3, 0.0),   # a run of one, broken
+            (7.02, 0.0, 1.2, 0.0), (7.03, 0.0, -1.3, 0.0),  # a run of two: no widening
+            (7.5, 0.1, 0.3, 0.0), (9.0, -0.2, 0.2, 0.0),   # t_u after WIDEN2: as assigned
+            (9.5, 0.1, -0.6, 350.0), (9.6, -0.1, 0.6, -520.0),   # SAT_HIGH, SAT_LOW: u_ff holds
+            (9.65, 0.0, 0.45, 320.0),                   # integrates: u_ff bounded by u_max - u_ext
+            (9.7, 0.2, -0.3, 40.0)]
+    for t, raw1, r2, u_ext in plan:
+        xr = ref.case3_ref(t)[0]
+        for k in range(200):
+            grow = 1.0 + 0.05 * k
+            j1 = 0.0 if k == 0 else rng.uniform(-0.01, 0.01) * grow
+            j2 = 0.0 if k == 0 else rng.uniform(-0.01, 0.01) * grow
+            x, v = ppc_aim(run, t, xr, raw1 + j1, r2 + j2, u_ext)
+            if run.try_row(t, x, v, xr, u_ext=u_ext):
+                break
+        else:
+            raise KnifeEdge("ppc widen: no clean row near t=%g" % t)
+    return dict(name="widen", cfg=run.cfg, rows=run.rows,
+                doc="Case 3 (t_u 2, w1 0.2, w2 0.5) with funnel widening (widen_r 0.5, "
+                    "widen2_steps 3), feedforward (2/s, 10 ms, ff_init 100) and u_ext")
+
+
 def ppc_cfg_c(c: ref.PpcConfig) -> str:
     return cfg_init([
         ("a_cm_s", cf(c.a_cm_s)), ("c", cf(c.c)), ("w1_cm", cf(c.w1_cm)),
@@ -456,13 +600,14 @@ def ppc_cfg_c(c: ref.PpcConfig) -> str:
         ("soft_barrier_r", cf(c.soft_barrier_r)), ("ff_gain_per_s", cf(c.ff_gain_per_s)),
         ("ff_init", cf(c.ff_init)), ("period_s", cf(c.period_s)),
         ("band_enabled", str(int(c.band_enabled))), ("k_low_cm", cf(c.k_low_cm)),
-        ("k_high_cm", cf(c.k_high_cm))])
+        ("k_high_cm", cf(c.k_high_cm)), ("widen_r", cf(c.widen_r)),
+        ("widen2_steps", f"{int(c.widen2_steps)}u")])
 
 
 def ppc_row_c(r: PpcRow) -> str:
     o = r.out
-    vals = [r.t, r.x, r.v, r.xr, o.alpha, o.e_cm, o.lambda1_cm, o.chi, o.theta_cm_s,
-            o.lambda2_cm_s, o.delta, o.beta_s_cm, o.u_law, o.u_ff, o.u]
+    vals = [r.t, r.x, r.v, r.xr, r.u_ext, o.alpha, o.e_cm, o.lambda1_cm, o.chi, o.theta_cm_s,
+            o.lambda2_cm_s, o.delta, o.beta_s_cm, o.u_law, o.u_ff, o.u, o.g1, o.g2]
     return "{ " + ", ".join(cf(v) for v in vals) + ", " + cflags(o.flags) + " }"
 
 
@@ -485,6 +630,7 @@ def build_ppc() -> str:
                    "itself reaches its clamp at u_max and u_min",
                    150.0, 0.01, 300.0,
                    ((3, 80.0), (2, -300.0), (3, 200.0), (2, -200.0), (3, -100.0)), 1402),
+        ppc_widen_set(),
     ]
     for s in sets:
         s["cfg_c"] = ppc_cfg_c(s["cfg"])

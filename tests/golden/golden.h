@@ -21,9 +21,10 @@
 
 /* ---- paper's controller: rows are independent except through u_ff ---- */
 typedef struct golden_ppc_row {
-    float t_s, x_cm, v_cm_s, xr_cm;                       /* inputs */
+    float t_s, x_cm, v_cm_s, xr_cm, u_ext;                /* inputs (pma_ppc_step_ext_*) */
     float alpha, e_cm, lambda1_cm, chi, theta_cm_s,       /* expected */
           lambda2_cm_s, delta, beta_s_cm, u_law, u_ff, u;
+    float g1, g2;                                         /* the funnels' scales (widening) */
     uint32_t flags;                                       /* PMA_PPC_FLAG_* */
 } golden_ppc_row_t;
 

@@ -30,7 +30,7 @@ import numpy as np
 
 __all__ = [
     "PPC_FLAG_BARRIER1", "PPC_FLAG_BARRIER2", "PPC_FLAG_SAT_HIGH", "PPC_FLAG_SAT_LOW",
-    "PPC_FLAG_SOFT1", "PPC_FLAG_SOFT2",
+    "PPC_FLAG_SOFT1", "PPC_FLAG_SOFT2", "PPC_FLAG_WIDEN1", "PPC_FLAG_WIDEN2", "PPC_FLAG_WIDE",
     "MFAC_FLAG_RESET", "MFAC_FLAG_SAT_HIGH", "MFAC_FLAG_SAT_LOW",
     "PID_FLAG_SAT_HIGH", "PID_FLAG_SAT_LOW",
     "VELEST_FILTERED_DIFF", "VELEST_TRACKING",
@@ -51,6 +51,10 @@ PPC_FLAG_SAT_HIGH = 0x04
 PPC_FLAG_SAT_LOW = 0x08
 PPC_FLAG_SOFT1 = 0x10
 PPC_FLAG_SOFT2 = 0x20
+PPC_FLAG_WIDEN1 = 0x40
+PPC_FLAG_WIDEN2 = 0x80
+PPC_FLAG_WIDE = 0x100
+WIDEN_G_MIN = 2.0 ** -20    # the widened funnel's scale is kept at or above this
 
 MFAC_FLAG_RESET = 0x01
 MFAC_FLAG_SAT_HIGH = 0x04
@@ -97,7 +101,8 @@ def _finite(*values: float) -> bool:
 
 
 # ---------------------------------------------------------------------------------------------
-# The paper's controller (eq. 15-22) with barrier clamp, soft barrier and feedforward.
+# The paper's controller (eq. 15-22) with barrier clamp, soft barrier, feedforward, an added
+# input u_ext and funnel widening.
 
 @dataclass(frozen=True)
 class PpcConfig:
@@ -118,6 +123,8 @@ class PpcConfig:
     band_enabled: int = 0
     k_low_cm: float = -3.0
     k_high_cm: float = 0.0
+    widen_r: float = 0.0        # 0: off (the paper's clamp); else |r| after a widening
+    widen2_steps: int = 0       # lambda2's funnel widens after this many clamped steps (0: never)
 
     def validate(self) -> None:
         """Raise ValueError on a configuration ppc.h declares invalid."""
@@ -137,6 +144,11 @@ class PpcConfig:
             raise ValueError("ff_gain_per_s must be >= 0")
         if not self.u_min <= self.ff_init <= self.u_max:
             raise ValueError("ff_init must be within [u_min, u_max]")
+        if not _finite(self.widen_r) or not (self.widen_r == 0.0 or
+                                             0.05 <= self.widen_r < 1.0 - self.barrier_margin):
+            raise ValueError("widen_r must be 0 or in [0.05, 1 - barrier_margin)")
+        if self.widen2_steps < 0:
+            raise ValueError("widen2_steps must be >= 0")
         if self.band_enabled:
             if not self.k_low_cm < self.k_high_cm:
                 raise ValueError("k_low < k_high required")
@@ -148,9 +160,13 @@ class PpcConfig:
 class PpcOutput:
     """One step of the paper's controller: the fields of ``pma_ppc_out_f32_t``.
 
-    ``u_ff`` is the feedforward used in this step (before its update).
-    ``r1``, ``r2`` (normalised arguments before the barrier clamp) and ``u_unclamped``
-    (u_ff + u_law) are diagnostics, not part of the C output.
+    ``u_ff`` is the feedforward used in this step (before its update). ``g1``, ``g2`` are
+    the funnels' scales (1: as assigned; w_i / g_i is the funnel of the step).
+    ``r1``, ``r2`` (normalised arguments lambda_i g_i / w_i before the barrier clamp),
+    ``raw1``, ``raw2`` (lambda_i / w_i, the funnels as assigned), ``u_unclamped``
+    (u_ff + u_law + u_ext), ``dt1``, ``dt2`` (time since the channel's last widening, or
+    None) and ``pre1``, ``pre2`` (|r_i| in the funnel of the step before it widens: what the
+    widening decision compares with r_max) are diagnostics, not part of the C output.
     """
 
     alpha: float
@@ -168,6 +184,14 @@ class PpcOutput:
     r1: float
     r2: float
     u_unclamped: float
+    g1: float = 1.0
+    g2: float = 1.0
+    raw1: float = 0.0
+    raw2: float = 0.0
+    dt1: float | None = None
+    dt2: float | None = None
+    pre1: float = 0.0
+    pre2: float = 0.0
 
 
 def ppc_alpha(t_s: float, t_u_s: float) -> float:
@@ -214,39 +238,83 @@ class TanTransform:
 class Ppc:
     """The paper's controller (prescribed performance control, eq. 15-22).
 
-    State: the feedforward u_ff (starts at ff_init). Rows are otherwise independent.
+    State: the feedforward u_ff (starts at ff_init); with funnel widening (widen_r > 0) each
+    channel's last widening (its scale and time) and lambda2's run of clamped steps.
+
+    Funnel widening, as ppc.h states it: where |lambda_i / w_i| (in the funnel of the step)
+    reaches the clamp r_max, channel i's funnel widens instead (lambda1's at once, lambda2's
+    on the widen2_steps-th step of a run at the clamp; widen2_steps 0: never): its scale g_i
+    is multiplied by widen_r / |r_i| (at least WIDEN_G_MIN), so that |r_i| = widen_r, flag
+    WIDEN1/2. Afterwards g_i(t) = 1 - (1 - k_i)(1 - alpha(t - t_i)) with alpha the tuning
+    function (eq. 15) and k_i, t_i the scale and time of the last widening; t_u after it the
+    funnel is as assigned. r_i = lambda_i g_i / w_i; beta = sec^2(delta) g2 / w2; flag WIDE
+    while a g_i < 1.
     """
 
     def __init__(self, cfg: PpcConfig) -> None:
         cfg.validate()
         self.cfg = cfg
         self.transform = TanTransform(1.0 - cfg.barrier_margin, cfg.soft_barrier_r)
-        self.u_ff = cfg.ff_init
-        self.breaches1 = 0
-        self.breaches2 = 0
+        self.reset()
 
     def reset(self) -> None:
-        """Feedforward back to ff_init, counters cleared."""
+        """Feedforward back to ff_init, counters cleared, funnels as assigned."""
         self.u_ff = self.cfg.ff_init
         self.breaches1 = 0
         self.breaches2 = 0
+        self.widened: list[tuple[float, float] | None] = [None, None]   # (k_i, t_i) while wide
+        self.clamp_run2 = 0
 
-    def step(self, t_s: float, x_cm: float, v_cm_s: float, xr_cm: float) -> PpcOutput:
-        """One control step at time t_s (since task start) with position, velocity, reference."""
-        if not _finite(t_s, x_cm, v_cm_s, xr_cm):
-            raise ValueError("non-finite input")
+    def _funnel(self, i: int, t_s: float, raw: float) -> tuple[float, float, int, float | None, float]:
+        """(r_i, g_i, flags, t - t_i, |r_i| before a widening) of channel i from
+        raw = lambda_i / w_i."""
         cfg = self.cfg
         flags = 0
+        g, dt = 1.0, None
+        last = self.widened[i]
+        if last is not None:
+            k, t_i = last
+            dt = t_s - t_i
+            if dt >= cfg.t_u_s:
+                self.widened[i] = None
+            else:
+                g = 1.0 - (1.0 - k) * (1.0 - ppc_alpha(max(dt, 0.0), cfg.t_u_s))
+        widens_at_all = cfg.widen_r > 0.0 and (i == 0 or cfg.widen2_steps > 0)
+        pre = abs(raw * g)
+        at_clamp = widens_at_all and pre >= self.transform.r_max
+        if i == 1:
+            self.clamp_run2 = self.clamp_run2 + 1 if at_clamp else 0
+        if at_clamp and (i == 0 or self.clamp_run2 >= cfg.widen2_steps):
+            if i == 1:
+                self.clamp_run2 = 0
+            g = max(g * cfg.widen_r / pre, WIDEN_G_MIN)
+            self.widened[i] = (g, t_s)
+            flags |= PPC_FLAG_WIDEN1 if i == 0 else PPC_FLAG_WIDEN2
+            dt = 0.0
+        if g < 1.0:
+            flags |= PPC_FLAG_WIDE
+        return raw * g, g, flags, dt, pre
+
+    def step(self, t_s: float, x_cm: float, v_cm_s: float, xr_cm: float,
+             u_ext: float = 0.0) -> PpcOutput:
+        """One control step at time t_s (since task start) with position, velocity, reference,
+        and the input u_ext added to the law's output before the clamp."""
+        if not _finite(t_s, x_cm, v_cm_s, xr_cm, u_ext):
+            raise ValueError("non-finite input")
+        cfg = self.cfg
         alpha = ppc_alpha(t_s, cfg.t_u_s)
         e = x_cm - xr_cm
         lambda1 = alpha * e
-        r1 = lambda1 / cfg.w1_cm
+        raw1 = lambda1 / cfg.w1_cm
+        r1, g1, flags1, dt1, pre1 = self._funnel(0, t_s, raw1)
         chi, _, clamped1, soft1 = self.transform.apply(r1)
         theta = -cfg.a_cm_s * chi
         lambda2 = alpha * v_cm_s - theta
-        r2 = lambda2 / cfg.w2_cm_s
+        raw2 = lambda2 / cfg.w2_cm_s
+        r2, g2, flags2, dt2, pre2 = self._funnel(1, t_s, raw2)
+        flags = flags1 | flags2
         delta, sec2_2, clamped2, soft2 = self.transform.apply(r2)
-        beta = sec2_2 / cfg.w2_cm_s
+        beta = sec2_2 * g2 / cfg.w2_cm_s
         u_law = -cfg.c * beta * delta
         if clamped1:
             flags |= PPC_FLAG_BARRIER1
@@ -259,7 +327,7 @@ class Ppc:
         if soft2:
             flags |= PPC_FLAG_SOFT2
         u_ff = self.u_ff
-        u_unclamped = u_ff + u_law
+        u_unclamped = u_ff + u_law + u_ext
         if u_unclamped > cfg.u_max:
             flags |= PPC_FLAG_SAT_HIGH
         if u_unclamped < cfg.u_min:
@@ -268,12 +336,14 @@ class Ppc:
         if cfg.ff_gain_per_s > 0.0:
             hold = ((flags & PPC_FLAG_SAT_HIGH) and u_law > 0.0) or \
                    ((flags & PPC_FLAG_SAT_LOW) and u_law < 0.0)
-            if not hold:
+            if not hold:   # bounded so that u_ff + u_ext stays within the input range
                 self.u_ff = _clamp(u_ff + cfg.ff_gain_per_s * cfg.period_s * u_law,
-                                   cfg.u_min, cfg.u_max)
+                                   cfg.u_min - u_ext, cfg.u_max - u_ext)
         return PpcOutput(alpha=alpha, e_cm=e, lambda1_cm=lambda1, chi=chi, theta_cm_s=theta,
                          lambda2_cm_s=lambda2, delta=delta, beta_s_cm=beta, u_law=u_law,
-                         u_ff=u_ff, u=u, flags=flags, r1=r1, r2=r2, u_unclamped=u_unclamped)
+                         u_ff=u_ff, u=u, flags=flags, r1=r1, r2=r2, u_unclamped=u_unclamped,
+                         g1=g1, g2=g2, raw1=raw1, raw2=raw2, dt1=dt1, dt2=dt2, pre1=pre1,
+                         pre2=pre2)
 
 
 # ---------------------------------------------------------------------------------------------

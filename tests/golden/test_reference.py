@@ -152,6 +152,53 @@ def test_ppc_feedforward_integrates_and_holds() -> None:
     assert p.u_ff == 350.0
 
 
+def test_ppc_funnel_widening_known_values() -> None:
+    """ppc.h's funnel widening by hand: |r1| = widen_r at the widening, g1 = widen_r / |raw1|,
+    half way back after t_u / 2 (the tuning function's middle), as assigned after t_u; no
+    clamp meanwhile."""
+    cfg = ref.PpcConfig(**{**CASE3.__dict__, "widen_r": 0.5})
+    p = ref.Ppc(cfg)
+    o = p.step(5.0, -2.0 + 0.2 * 1.6, 0.0, -2.0)      # raw1 = 1.6 after t_u
+    assert o.flags & ref.PPC_FLAG_WIDEN1 and o.flags & ref.PPC_FLAG_WIDE
+    assert not o.flags & ref.PPC_FLAG_BARRIER1
+    assert o.g1 == pytest.approx(0.5 / 1.6) and o.r1 == pytest.approx(0.5)
+    assert o.chi == pytest.approx(1.0)                # tan(pi / 4)
+    k = o.g1
+    o = p.step(6.0, -2.0, 0.0, -2.0)                  # t_u / 2 later
+    assert o.g1 == pytest.approx(1.0 - (1.0 - k) * 0.5) and o.flags == ref.PPC_FLAG_WIDE
+    o = p.step(7.0, -2.0 + 0.2 * 0.9, 0.0, -2.0)      # t_u later: assigned, raw1 0.9 inside
+    assert o.g1 == 1.0 and o.flags & ref.PPC_FLAG_WIDE == 0 and o.r1 == pytest.approx(0.9)
+    # off: the paper's clamp
+    o = ref.Ppc(CASE3).step(5.0, -2.0 + 0.2 * 1.6, 0.0, -2.0)
+    assert o.flags & ref.PPC_FLAG_BARRIER1 and o.g1 == 1.0
+
+
+def test_ppc_velocity_funnel_widens_on_the_nth_clamped_step() -> None:
+    cfg = ref.PpcConfig(**{**CASE3.__dict__, "widen_r": 0.5, "widen2_steps": 3})
+    p = ref.Ppc(cfg)
+    flags = [p.step(5.0 + 0.001 * k, -2.0, 0.5 * 1.5, -2.0).flags for k in range(3)]
+    assert [f & (ref.PPC_FLAG_BARRIER2 | ref.PPC_FLAG_WIDEN2) for f in flags] == \
+        [ref.PPC_FLAG_BARRIER2, ref.PPC_FLAG_BARRIER2, ref.PPC_FLAG_WIDEN2]
+    o = p.step(5.002, -2.0, 0.0, -2.0)                # at the widening's time: g2 = k2
+    assert o.g2 == pytest.approx(0.5 / 1.5) and o.flags == ref.PPC_FLAG_WIDE
+    assert o.beta_s_cm == pytest.approx((1.0 + o.delta ** 2) * o.g2 / 0.5)
+    # widen2_steps 0: lambda2 never widens
+    p0 = ref.Ppc(ref.PpcConfig(**{**CASE3.__dict__, "widen_r": 0.5}))
+    assert all(p0.step(5.0 + 0.001 * k, -2.0, 0.75, -2.0).flags & ref.PPC_FLAG_BARRIER2 for k in range(5))
+
+
+def test_ppc_u_ext_and_the_feedforward_bound() -> None:
+    cfg = ref.PpcConfig(**{**CASE3.__dict__, "ff_gain_per_s": 2.0, "period_s": 0.01, "ff_init": 100.0})
+    p = ref.Ppc(cfg)
+    o = p.step(5.0, -2.0, 0.0, -2.0, u_ext=30.0)
+    assert o.u == pytest.approx(130.0) and o.u_law == 0.0
+    o = p.step(5.0, -2.0, 0.0, -2.0, u_ext=350.0)     # 100 + 0 + 350 > 400: SAT_HIGH
+    assert o.flags & ref.PPC_FLAG_SAT_HIGH and o.u == 400.0
+    assert p.u_ff == 50.0                             # u_law = 0 integrates: u_ff <= 400 - u_ext
+    o = p.step(5.0, -2.0, 0.1, -2.0, u_ext=350.0)
+    assert o.u_law < 0 and not o.flags and p.u_ff == pytest.approx(50.0 + 0.02 * o.u_law)
+
+
 # --------------------------------------------------------------------------------------------
 # MFAC
 
