@@ -7,13 +7,17 @@
     .venv/bin/python tools/hil_matrix.py --matrix variants --jobs 2       # the shipped variant files
     .venv/bin/python tools/hil_matrix.py --matrix ten --out build/matrix  # and each run's summary
     .venv/bin/python tools/hil_matrix.py --matrix audit2 --jobs 2       # the second audit's eight rigs
+    .venv/bin/python tools/hil_matrix.py --matrix random --seed 7 --count 8 --jobs 2   # rigs drawn at random
 
 Each run is `python -m hil offline TASK --commission --controller ppc --controller mfac --brief
 --rig PATH=VALUE ... --json FILE` (the firmware offline, both lanes commissioned on that rig over
 CAN frames, docs/hil.md "Offline"), one process each, `--jobs` at a time; the table is read from
 their summaries. A rig is a base profile (nominal, dmsp10, mas10-itv2050: the task files of
 hil/scenarios/ or hil/scenarios/realistic/PROFILE/) and rig parameter values (hil/rig_params.py).
-Deterministic: the same code prints the same table.
+`--matrix random` draws its rigs instead (RANDOM_RANGES: a base profile, then each property
+scaled or shifted from that profile's own value with a probability of 0.6), so that nobody
+chose them, not even after seeing the rules; --seed makes a draw repeatable.
+Deterministic: the same code (and seed) prints the same table.
 """
 from __future__ import annotations
 
@@ -26,6 +30,8 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
 LEVEL = 1.001   # worst PPC / MFAC RMSTE still counted level: within 0.1 % (docs/hil.md, the variant test)
@@ -128,6 +134,56 @@ AUDIT2 = (
 MATRICES = {"seven": (SEVEN, True), "eight": (EIGHT, True), "ten": (TEN, False),
             "audit2": (AUDIT2, False)}   # (rigs, case3 --quick)
 
+PROFILES = ("nominal", "dmsp10", "mas10-itv2050")
+# --matrix random: (rig parameter, how it is drawn from the profile's value v, low, high, the
+# profiles it applies to). "scale": v * U(low, high); "shift": v + U(low, high); "bits": one of
+# low..high. The spans are those of docs/hil.md's variants and audits: what differs between
+# real rigs of one design.
+RANDOM_RANGES: tuple[tuple[str, str, float, float, tuple[str, ...]], ...] = (
+    ("muscle.stiffness_scale", "scale", 0.7, 1.3, PROFILES),
+    ("muscle.hyst_force_n", "scale", 0.6, 1.8, PROFILES),
+    ("load.mass_kg", "scale", 0.55, 1.5, PROFILES),
+    ("load.bias_force_n", "shift", -25.0, 25.0, PROFILES),
+    ("regulator.tau_s", "scale", 1.0, 3.3, ("nominal",)),
+    ("regulator.dead_time_s", "scale", 1.0, 4.0, ("nominal",)),
+    ("valve.fill_rate_kpa_s", "scale", 0.4, 1.3, ("dmsp10", "mas10-itv2050")),
+    ("valve.exhaust_rate_kpa_s", "scale", 0.4, 1.3, ("dmsp10", "mas10-itv2050")),
+    ("valve.dead_time_rise_s", "scale", 0.7, 2.5, ("dmsp10", "mas10-itv2050")),
+    ("valve.dead_time_fall_s", "scale", 0.7, 2.5, ("dmsp10", "mas10-itv2050")),
+    ("sensor.noise_cm", "scale", 1.0, 4.0, PROFILES),
+    ("sensor.adc_bits", "bits", 10, 12, PROFILES),
+    ("creep.frac_contract", "shift", 0.0, 0.12, PROFILES),
+    ("drift.temp_rate_k_per_s", "scale", 1.0, 20.0, PROFILES),
+)
+
+
+def random_rigs(seed: int, count: int) -> tuple[Rig, ...]:
+    """`count` rigs drawn with numpy's generator from `seed` (RANDOM_RANGES)."""
+    from hil.scenario import load  # the harness (installed), for each profile's own values
+    rng = np.random.default_rng(seed)
+    rigs = []
+    for i in range(count):
+        profile = PROFILES[int(rng.integers(len(PROFILES)))]
+        base = load(task_file(profile, "case3")).rig_params()
+        values, labels = [], []
+        for path, how, lo, hi, where in RANDOM_RANGES:
+            take = rng.random() < 0.6          # drawn in every case: the stream does not depend on it
+            x = rng.uniform(lo, hi)
+            if not take or profile not in where:
+                continue
+            section, name = path.split(".")
+            v = float(getattr(getattr(base, section), name))
+            if how == "bits":
+                value = str(int(round(x)))
+            elif how == "shift":
+                value = f"{v + x:.4g}"
+            else:
+                value = f"{v * x:.4g}"
+            values.append(f"{path}={value}")
+            labels.append(f"{name} {value}")
+        rigs.append(Rig(f"R{i + 1}: `{profile}`, " + ", ".join(labels), profile, " ".join(values)))
+    return tuple(rigs)
+
 
 def task_file(profile: str, task: str) -> str:
     return task if profile == "nominal" else str(ROOT / "hil/scenarios/realistic" / profile / f"{task}.toml")
@@ -161,12 +217,19 @@ def row(label: str, task: str, s: dict[str, Any]) -> tuple[str, float]:
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--matrix", choices=sorted(MATRICES) + ["variants"], required=True)
+    ap.add_argument("--matrix", choices=sorted(MATRICES) + ["variants", "random"], required=True)
     ap.add_argument("--jobs", type=int, default=1, help="runs at a time (default 1)")
     ap.add_argument("--out", type=Path, help="keep each run's summary JSON in this folder")
+    ap.add_argument("--seed", type=int, default=1, help="--matrix random: the draw's seed (default 1)")
+    ap.add_argument("--count", type=int, default=8, help="--matrix random: how many rigs (default 8)")
+    ap.add_argument("--quick", action="store_true", help="Case 3's --quick run (its first 60 s)")
     args = ap.parse_args()
     if args.jobs < 1:
         ap.error("--jobs must be at least 1")
+    if args.count < 1:
+        ap.error("--count must be at least 1")
+    if args.seed < 0:
+        ap.error("--seed must be >= 0")
     out = args.out or Path(tempfile.mkdtemp(prefix="hil_matrix_"))
     out.mkdir(parents=True, exist_ok=True)
     jobs: list[tuple[str, str, list[str]]] = []
@@ -174,8 +237,14 @@ def main() -> int:
         for f in sorted((ROOT / "hil/scenarios/variants").glob("*.toml")):
             jobs.append((f.stem, "", [str(f)]))
     else:
-        rigs, quick3 = MATRICES[args.matrix]
+        if args.matrix == "random":
+            rigs, quick3 = random_rigs(args.seed, args.count), args.quick
+        else:
+            rigs, quick3 = MATRICES[args.matrix]
+            quick3 = quick3 or args.quick
         for rig in rigs:
+            if args.matrix == "random":
+                print(f"{rig.name}: {rig.profile} {rig.values}", file=sys.stderr)
             for task in TASKS:
                 extra = ["--quick"] if quick3 and task == "case3" else []
                 rig_args = [a for v in rig.values.split() for a in ("--rig", v)]

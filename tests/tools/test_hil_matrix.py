@@ -51,8 +51,33 @@ def test_every_rig_value_is_a_rig_parameter(matrix):
             base.replace(**{path: float(number)}).validate()   # ValueError for an unknown path
 
 
+def test_random_rigs_are_repeatable_valid_and_within_their_spans():
+    rigs = hm.random_rigs(5, 12)
+    assert rigs == hm.random_rigs(5, 12) and rigs != hm.random_rigs(6, 12)
+    assert hm.random_rigs(5, 3) == rigs[:3]            # the first n of a longer draw
+    spans = {path: (how, lo, hi, where) for path, how, lo, hi, where in hm.RANDOM_RANGES}
+    for rig in rigs:
+        base = scn.load(hm.task_file(rig.profile, "case3")).rig_params()
+        params = base
+        for value in rig.values.split():
+            path, _, number = value.partition("=")
+            how, lo, hi, where = spans[path]
+            assert rig.profile in where
+            section, name = path.split(".")
+            v, x = float(getattr(getattr(base, section), name)), float(number)
+            if how == "bits":
+                assert x in (10, 11, 12)
+            elif how == "shift":
+                assert v + lo - 1e-3 <= x <= v + hi + 1e-3
+            else:
+                assert v * lo * (1 - 1e-3) <= x <= v * hi * (1 + 1e-3)
+            params = params.replace(**{path: x})
+        params.validate()
+
+
 def test_bad_options_exit_2():
-    for args in (["--matrix", "eleven"], ["--matrix", "ten", "--jobs", "0"], []):
+    for args in (["--matrix", "eleven"], ["--matrix", "ten", "--jobs", "0"], [],
+                 ["--matrix", "random", "--count", "0"], ["--matrix", "random", "--seed", "-1"]):
         r = subprocess.run([sys.executable, str(TOOL), *args], capture_output=True, text=True)
         assert r.returncode == 2, (args, r.stderr)
 
