@@ -9,7 +9,8 @@ one control tick) for --seconds of wall time and counts completed steps:
 
   raw        python-can send of a prebuilt frame + recv of the node's PLANT_ACTUATOR:
              the limit of this loop (the node's tick is in it)
-  +codec     the frames encoded and decoded with cantools from the DBC
+  +codec     the frames encoded and decoded as the runner does (the DBC's layouts compiled
+             once, pmactl.frame_layout)
   +log       and every frame written to the python-can BLF log
   +rig       and the simulated rig stepped by one control period (RK4)
   raw+telem  the raw loop again with the node RUNNING the runner's scenario: every frame
@@ -71,7 +72,6 @@ def measure(cfg: dict[str, Any], seconds: float, work: Path) -> dict[str, Any]:
     proto = protocol()
     sensor_id = proto.frame_id("PLANT_SENSOR", NODE)
     act_id = proto.frame_id("PLANT_ACTUATOR", NODE)
-    sensor_def, act_def = proto.messages["PLANT_SENSOR"], proto.messages["PLANT_ACTUATOR"]
     rig = Rig(RigParams.from_dict({"p0_kpa": 300.0, "substep_s": 2.5e-4}), seed=1)
     fw = FirmwareProcess(work, ["--node", str(NODE), "--storage", str(work / "bench.nvm"), "--lockstep",
                                 "--watchdog-ms", str(LOCKSTEP_WATCHDOG_MS)],
@@ -111,12 +111,11 @@ def measure(cfg: dict[str, Any], seconds: float, work: Path) -> dict[str, Any]:
             def step(_: int) -> None:
                 state["seq"] = (state["seq"] + 1) & 0xFF
                 counts = rig.sensor_counts() if use_rig else 2064
-                data = sensor_def.encode({"Seq": state["seq"], "RawCounts": counts}, scaling=False)
-                r = exchange(bytes(data), log)
-                sig = act_def.decode(bytes(r.data), decode_choices=False, scaling=False)
-                assert isinstance(sig, dict)    # not a container message
+                data = proto.encode_raw("PLANT_SENSOR", {"Seq": state["seq"], "RawCounts": counts})
+                r = exchange(data, log)
+                sig = proto.decode("PLANT_ACTUATOR", bytes(r.data))
                 if use_rig:
-                    rig.apply_dac(int(sig["DacCounts"]))  # type: ignore[arg-type]  # an integer signal
+                    rig.apply_dac(int(sig["DacCounts"]))
                     rig.step(1e-3)
             return step
 

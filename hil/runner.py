@@ -109,6 +109,7 @@ class Lane:
     identity: dict[str, Any] = field(default_factory=dict)  # the node's DEVICE_INFO (pmactl.identity)
     sink: deque[can.Message] | None = None   # while commissioning: the node's frames for its LaneBus
     commissioning: dict[str, Any] | None = None   # what commissioning measured and derived (--commission)
+    sensor_id: int = 0      # the frame id of its PLANT_SENSOR (set with the lane)
 
 
 BUS_DBC = "bus.dbc"     # the DBC of the run's nodes (pmactl.nodedbc), beside the bus log
@@ -231,7 +232,8 @@ class Runner:
             if self.opts.board:
                 # a board samples its ADC unless told to take the rig's samples (only while disarmed)
                 params = {"sys.plant_bridge": 1, **params}
-            lane = Lane(i, ctrl, node, Rig(rp, seed=self.sc.seed), client, params)
+            lane = Lane(i, ctrl, node, Rig(rp, seed=self.sc.seed), client, params,
+                        sensor_id=self.proto.frame_id("PLANT_SENSOR", node))
             self.lanes.append(lane)
             for name in msgs:
                 self._dispatch[self.proto.frame_id(name, node)] = (i, name)
@@ -404,8 +406,8 @@ class Runner:
         the counts."""
         lane.seq = (lane.seq + 1) & 0xFF
         counts = lane.rig.sensor_counts()
-        data = self.proto.messages["PLANT_SENSOR"].encode({"Seq": lane.seq, "RawCounts": counts}, scaling=False)
-        self.send_frame(can.Message(arbitration_id=self.proto.frame_id("PLANT_SENSOR", lane.node), data=data,
+        data = self.proto.encode_raw("PLANT_SENSOR", {"Seq": lane.seq, "RawCounts": counts})
+        self.send_frame(can.Message(arbitration_id=lane.sensor_id, data=data,
                                     is_extended_id=False, timestamp=self.last_rx_s, is_rx=False))
         return counts
 
@@ -515,9 +517,7 @@ class Runner:
             return None
         if len(msg.data) != 4:
             return None
-        decoded = self.proto.messages["PLANT_ACTUATOR"].decode(bytes(msg.data), decode_choices=False, scaling=False)
-        assert isinstance(decoded, dict)        # not a container message
-        return lane, decoded
+        return lane, self.proto.decode("PLANT_ACTUATOR", bytes(msg.data))
 
     def _other_frame(self, lane: Lane, name: str, msg: can.Message) -> None:
         try:

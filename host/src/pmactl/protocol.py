@@ -21,6 +21,8 @@ from typing import Any
 import cantools
 import cantools.database
 
+from .frame_layout import FrameLayout
+
 NODE_ID_MASK = 0x00F
 BASE_ID_MASK = 0x7F0
 NODE_COUNT = 16
@@ -196,6 +198,8 @@ class Protocol:
         self.by_name = {p.name: p for p in self.params}
         self.by_id = {p.id: p for p in self.params}
         self.messages = {m.name: m for m in self.db.messages}
+        # raw codecs compiled once (frame_layout.py), where a message needs no cantools
+        self.layouts: dict[str, FrameLayout | None] = {m.name: FrameLayout.of(m) for m in self.db.messages}
         self.status_names: dict[int, str] = self._choices("PARAM_RESP", "Result")
         self.fault_names: dict[int, str] = self._choices("HEARTBEAT", "FaultCode")
         self.state_names: dict[int, str] = self._choices("HEARTBEAT", "State")
@@ -247,11 +251,20 @@ class Protocol:
             return b""
         return bytes(m.encode(data or {}, scaling=False, strict=True))
 
+    def encode_raw(self, message: str, data: Mapping[str, int | float]) -> bytes:
+        """`encode` without cantools where the message has a compiled layout (the HIL loop's
+        frames): raw values, each within its signal's bits (ValueError otherwise)."""
+        layout = self.layouts[message]
+        return layout.encode(data) if layout is not None else self.encode(message, dict(data))
+
     def decode(self, message: str, data: bytes) -> dict[str, Any]:
-        """The signals of a frame. A multiplexed frame (PARAM_REQ, PARAM_RESP) whose
+        """The signals of a frame (raw values). A multiplexed frame (PARAM_REQ, PARAM_RESP) whose
         multiplexer (Type) has a value the DBC does not define, such as the Type 3..15
         a node echoes from a request (docs/protocol.md), decodes to its plain signals
         (Op, Type, Id, Result) without a value signal."""
+        layout = self.layouts[message]
+        if layout is not None:
+            return layout.decode(data)
         m = self.messages[message]
         try:
             decoded = m.decode(data, decode_choices=False, scaling=False)
