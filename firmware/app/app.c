@@ -13,6 +13,7 @@
 #include "actuator.h"
 #include "app_core.h"
 #include "generated/pma_proto.h"
+#include "pma/finite.h"
 
 _Static_assert(PMA_PARAMS_BLOB_BYTES <= PMA_PSTORE_MAX_BLOB_BYTES,
                "the parameter blob must fit a storage record");
@@ -180,7 +181,7 @@ static int cmd_arm(pma_app_t *app)
     }
     pma_supervisor_limits_t lim;
     supervisor_limits(app, &lim);
-    if (!(app->sensor.x_cm >= lim.x_lo_cm && app->sensor.x_cm <= lim.x_hi_cm)) return PMA_ERR_RANGE;
+    if (!pma_f32_within(app->sensor.x_cm, lim.x_lo_cm, lim.x_hi_cm)) return PMA_ERR_RANGE;
     app->limits = lim;
 #if PMA_CTRL_Q16
     pma_app_io_q16_arm(app);

@@ -22,8 +22,8 @@ pma_fault_t pma_supervisor_check(const pma_supervisor_limits_t *lim,
     case PMA_ERR_RANGE: return PMA_FAULT_SENSOR_RANGE;
     default: return PMA_FAULT_SENSOR_READ;
     }
-    /* written so that a NaN position also trips */
-    if (!(in->x_cm >= lim->x_lo_cm && in->x_cm <= lim->x_hi_cm)) {
+    /* a NaN position also trips */
+    if (!pma_f32_within(in->x_cm, lim->x_lo_cm, lim->x_hi_cm)) {
         return PMA_FAULT_POSITION_LIMIT;
     }
     if (in->late_ticks > lim->max_late_ticks) return PMA_FAULT_TICK_OVERRUN;

@@ -5,11 +5,13 @@
  * Supervisor: each fault condition on its own, its threshold (one below does
  * not trip, at/above does), the documented priority order, nothing while the
  * output is inactive except CAN bus-off, the RUNNING-only checks ignored while
- * ARMED, a NaN or infinite position trips.
+ * ARMED, a NaN or infinite position trips; its position check from the floats' bits
+ * (pma/finite.h, on cores without an FPU) answers as the float comparisons for every float.
  * Actuator: validation rules, p = p0 + polarity * kpa_per_u * u with the
  * clamp to [p_min, p_max] and the slew limit, the safe modes VENT / HOLD /
  * FIXED (at once, no slew limit), non-finite inputs. */
 #include "app_test.h"
+#include "pma/finite.h"
 
 /* ------------------------------------------------------------ supervisor -- */
 
@@ -142,6 +144,61 @@ static void test_supervisor_nan_position_trips(void)
 }
 
 /* Inactive output (IDLE, FAULT, BOOT): only bus-off. */
+static float from_bits(uint32_t b)
+{
+    float f;
+    memcpy(&f, &b, sizeof f);
+    return f;
+}
+
+static uint32_t xorshift(uint32_t *s)
+{
+    *s ^= *s << 13;
+    *s ^= *s >> 17;
+    *s ^= *s << 5;
+    return *s;
+}
+
+/* pma_f32_within and pma_f32_order_key against the float comparisons (the C library's on
+ * cores without an FPU): every pair and triple of special values (zeros of both signs,
+ * the smallest subnormal, the limits, infinities, NaNs of both signs), then random bits
+ * and random floats near each other. */
+static void test_within_is_the_float_comparison(void)
+{
+    const uint32_t special[] = {0x00000000u, 0x80000000u, 0x00000001u, 0x80000001u, 0x007FFFFFu,
+                                0x00800000u, 0x3F800000u, 0xBF800000u, 0x7F7FFFFFu, 0xFF7FFFFFu,
+                                0x7F800000u, 0xFF800000u, 0x7FC00000u, 0xFFC00000u, 0x7F800001u};
+    enum { NS = sizeof special / sizeof special[0] };
+    unsigned checked = 0;
+    for (unsigned a = 0; a < NS; ++a) {
+        for (unsigned b = 0; b < NS; ++b) {
+            const float x = from_bits(special[a]), y = from_bits(special[b]);
+            if (x == x && y == y) {
+                TEST_ASSERT_EQUAL_INT(x <= y, pma_f32_order_key(x) <= pma_f32_order_key(y));
+            }
+            for (unsigned c = 0; c < NS; ++c) {
+                const float z = from_bits(special[c]);
+                TEST_ASSERT_EQUAL_INT(y <= x && x <= z, pma_f32_within(x, y, z));
+                ++checked;
+            }
+        }
+    }
+    uint32_t seed = 0x9E3779B9u;
+    for (unsigned i = 0; i < 20000u; ++i) {
+        const uint32_t bx = xorshift(&seed);
+        /* half of the bounds near x (the same exponent), half anywhere */
+        const uint32_t bl = (i & 1u) ? (bx ^ (xorshift(&seed) & 0x800000FFu)) : xorshift(&seed);
+        const uint32_t bh = (i & 2u) ? (bx ^ (xorshift(&seed) & 0x800000FFu)) : xorshift(&seed);
+        const float x = from_bits(bx), lo = from_bits(bl), hi = from_bits(bh);
+        TEST_ASSERT_EQUAL_INT(lo <= x && x <= hi, pma_f32_within(x, lo, hi));
+        if (x == x && lo == lo) {
+            TEST_ASSERT_EQUAL_INT(lo <= x, pma_f32_order_key(lo) <= pma_f32_order_key(x));
+        }
+        ++checked;
+    }
+    TEST_ASSERT_EQUAL_UINT(NS * NS * NS + 20000u, checked);
+}
+
 static void test_supervisor_inactive_only_bus_off(void)
 {
     setup_supervisor();
@@ -398,6 +455,7 @@ int main(void)
     RUN_TEST(test_supervisor_nothing_wrong);
     RUN_TEST(test_supervisor_each_condition);
     RUN_TEST(test_supervisor_nan_position_trips);
+    RUN_TEST(test_within_is_the_float_comparison);
     RUN_TEST(test_supervisor_inactive_only_bus_off);
     RUN_TEST(test_supervisor_armed_skips_running_checks);
     RUN_TEST(test_supervisor_priority);
