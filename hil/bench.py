@@ -5,7 +5,9 @@ the same firmware node in the same run, and where the time in between goes.
     python -m hil bench [--seconds 5]
 
 Each variant drives one pma-fw-host node in lockstep mode (one PLANT_SENSOR =
-one control tick) for --seconds of wall time and counts completed steps:
+one control tick) and counts completed steps, in 5 rounds of every variant in turn, each round
+starting one variant further on (--seconds of wall time per variant in all): the rates are
+each variant's median, the ratios the median of the rounds' ratios:
 
   raw        python-can send of a prebuilt frame + recv of the node's PLANT_ACTUATOR:
              the limit of this loop (the node's tick is in it)
@@ -41,7 +43,7 @@ from .rig_params import RigParams
 from .runner import LOCKSTEP_WATCHDOG_MS, REPLY_TIMEOUT_S, TIMED_EVERY
 from .scenario import parse, protocol
 
-NODE = 1
+NODE = 9          # the benchmark's own node; the runner's lanes are nodes 1, 2, ...
 ROUNDS = 5
 HOST_HEARTBEAT_EVERY = 100     # ticks: the runner's HOST_HEARTBEAT every 100 ms at 1 kHz
 # the runner variant's scenario; raw+telem runs the node with the same parameters
@@ -121,14 +123,36 @@ def measure(cfg: dict[str, Any], seconds: float, work: Path) -> dict[str, Any]:
 
         variants = {"raw": raw, "+codec": variant(False, False), "+log": variant(False, True),
                     "+rig": variant(True, True)}
-        # interleaved rounds, median per variant: the guest's single CPU is shared with
-        # whatever else the machine does, so one long block per variant would be skewed
-        samples: dict[str, list[float]] = {k: [] for k in variants}
-        for _ in range(ROUNDS):
-            for name, fn in variants.items():
-                samples[name].append(_loop(seconds / ROUNDS, fn))
+        running = _RunningNode(bus, fw, sensor_id, act_id)
+        # rounds of every variant in turn, the runner's too, and the median of each: the guest's
+        # one CPU is shared with whatever else the machine does, and how fast it runs drifts over
+        # a minute (the bare round trip 590-840 us on one day), so one block per variant would
+        # compare different machines; the ratios are the medians of each round's ratio. Each
+        # round starts one variant further on, so that no variant always follows the same one
+        # (the first of a fixed order ran up to 20 % faster than the second, the same loop)
+        slot = seconds / ROUNDS
+        runs: list[dict[str, float]] = []
+
+        def own_node(fn: Callable[[int], None]) -> Callable[[int], float]:
+            def rate(_: int) -> float:
+                bus.set_filters([{"can_id": act_id, "can_mask": 0x7FF, "extended": False}])
+                _drain(bus)
+                return _loop(slot, fn)
+            return rate
+
+        def runner(k: int) -> float:
+            runs.append(_runner_rate(cfg, slot, work / f"r{k}"))
+            return runs[-1]["ticks_per_s"]
+
+        rates_of: dict[str, Callable[[int], float]] = {
+            **{name: own_node(fn) for name, fn in variants.items()},
+            "raw+telem": lambda _k: running.rate(slot), "runner": runner}
+        names = list(rates_of)
+        samples: dict[str, list[float]] = {k: [] for k in names}
+        for k in range(ROUNDS):
+            for name in names[k % len(names):] + names[:k % len(names)]:
+                samples[name].append(rates_of[name](k))
         rates = {k: statistics.median(v) for k, v in samples.items()}
-        rates["raw+telem"] = _raw_running_rate(bus, fw, sensor_id, act_id, seconds)
         # the rig alone, outside the bus loop
         t0 = time.perf_counter()
         for _ in range(2000):
@@ -138,57 +162,72 @@ def measure(cfg: dict[str, Any], seconds: float, work: Path) -> dict[str, Any]:
         logger.stop()
         bus.shutdown()
         fw.stop(expect_status=0)
-    runs = sorted((_runner_rate(cfg, seconds / ROUNDS, work / f"r{i}") for i in range(3)),
-                  key=lambda r: r["ticks_per_s"])
-    rates["runner"] = runs[1]["ticks_per_s"]
-    split = {k: runs[1][k] / runs[1]["run_ticks"] * 1e6 for k in ("recv_wait_s", "rig_s", "other_s")}
+    mid = sorted(runs, key=lambda r: r["ticks_per_s"])[len(runs) // 2]
+    split = {k: mid[k] / mid["run_ticks"] * 1e6 for k in ("recv_wait_s", "rig_s", "other_s")}
     us = {k: 1e6 / v for k, v in rates.items()}
-    return {"seconds": seconds, "steps_per_s": rates, "us_per_step": us,
+
+    def ratio(a: str, b: str) -> float:
+        return statistics.median(x / y for x, y in zip(samples[a], samples[b]))
+    return {"seconds": seconds, "rounds": ROUNDS, "steps_per_s": rates, "us_per_step": us,
+            "steps_per_s_per_round": samples,
             "added_us_per_step": {k: us[k] - us[base] for k, base in ADDED_TO.items()},
             "rig_step_us_alone": rig_us, "runner_us_per_step": split,
-            "runner_vs_raw": rates["runner"] / rates["raw"],
-            "runner_vs_raw_telem": rates["runner"] / rates["raw+telem"]}
+            "runner_vs_raw": ratio("runner", "raw"),
+            "runner_vs_raw_telem": ratio("runner", "raw+telem")}
 
 
-def _raw_running_rate(bus: can.BusABC, fw: FirmwareProcess, sensor_id: int, act_id: int,
-                      seconds: float) -> float:
+def _drain(bus: can.BusABC) -> None:
+    """Frames left in the socket's queue (the node's answers to another variant)."""
+    while bus.recv(0) is not None:
+        pass
+
+
+class _RunningNode:
     """raw+telem: the node RUNNING the runner's scenario (PID holding a position), a prebuilt
-    sample out and every frame of the tick in, python-can only."""
-    bus.set_filters(None)
-    node = PmaNode(bus, NODE, protocol())
-    for key, value in {**RUN_PARAMS, "ref.offset_cm": RUN_REFERENCE["offset_cm"]}.items():
-        node.set(key, value)
-    node.select_controller("PID")
-    node.select_reference(str(RUN_REFERENCE["kind"]))
-    # a sample at the held position: the node measures x = offset, inside its limits
-    counts = Rig(RigParams.from_dict(RUN_RIG), seed=1).sensor_counts()
-    state = {"seq": 0, "hb": 0}
+    sample out and every frame of the tick in, python-can only; configured once, then ARMed,
+    STARTed, measured, STOPped and DISARMed in each round."""
 
-    def step(k: int) -> None:
-        state["seq"] = seq = (state["seq"] + 1) & 0xFF
+    def __init__(self, bus: can.BusABC, fw: FirmwareProcess, sensor_id: int, act_id: int) -> None:
+        self.bus, self.fw, self.sensor_id, self.act_id = bus, fw, sensor_id, act_id
+        bus.set_filters(None)
+        self.node = PmaNode(bus, NODE, protocol())
+        for key, value in {**RUN_PARAMS, "ref.offset_cm": RUN_REFERENCE["offset_cm"]}.items():
+            self.node.set(key, value)
+        self.node.select_controller("PID")
+        self.node.select_reference(str(RUN_REFERENCE["kind"]))
+        # a sample at the held position: the node measures x = offset, inside its limits
+        self.counts = Rig(RigParams.from_dict(RUN_RIG), seed=1).sensor_counts()
+        self.seq = self.hb = 0
+
+    def step(self, k: int) -> None:
+        self.seq = seq = (self.seq + 1) & 0xFF
         if k % HOST_HEARTBEAT_EVERY == 0:
-            node.host_heartbeat(state["hb"])
-            state["hb"] = (state["hb"] + 1) & 0xFF
-        bus.send(can.Message(arbitration_id=sensor_id, data=bytes([seq, counts & 0xFF, counts >> 8]),
-                             is_extended_id=False))
+            self.node.host_heartbeat(self.hb)
+            self.hb = (self.hb + 1) & 0xFF
+        self.bus.send(can.Message(arbitration_id=self.sensor_id,
+                                  data=bytes([seq, self.counts & 0xFF, self.counts >> 8]), is_extended_id=False))
         while True:
-            r = bus.recv(REPLY_TIMEOUT_S)
+            r = self.bus.recv(REPLY_TIMEOUT_S)
             if r is None:
-                raise RuntimeError(f"no PLANT_ACTUATOR within {REPLY_TIMEOUT_S:g} s:\n{fw.output()[-2000:]}")
-            if r.arbitration_id == act_id and r.data[0] == seq:
+                raise RuntimeError(f"no PLANT_ACTUATOR within {REPLY_TIMEOUT_S:g} s:\n{self.fw.output()[-2000:]}")
+            if r.arbitration_id == self.act_id and r.data[0] == seq:
                 return
 
-    for k in range(20):              # the node's sample is this one before ARM
-        step(k)
-    node.arm()
-    step(0)
-    node.start()
-    rate = statistics.median(_loop(seconds / ROUNDS, step) for _ in range(3))
-    status = node.status()
-    if status.state_name != "RUNNING":
-        raise RuntimeError(f"raw+telem: the node left RUNNING ({status.summary()})")
-    node.stop()
-    return rate
+    def rate(self, seconds: float) -> float:
+        self.bus.set_filters(None)
+        _drain(self.bus)
+        for k in range(20):              # the node's sample is this one before ARM
+            self.step(k)
+        self.node.arm()
+        self.step(0)
+        self.node.start()
+        rate = _loop(seconds, self.step)
+        status = self.node.status()
+        if status.state_name != "RUNNING":
+            raise RuntimeError(f"raw+telem: the node left RUNNING ({status.summary()})")
+        self.node.stop()
+        self.node.disarm()
+        return rate
 
 
 def _runner_rate(cfg: dict[str, Any], seconds: float, work: Path) -> dict[str, float]:
@@ -212,20 +251,28 @@ def run_bench(cfg: dict[str, Any], seconds: float, out: Path) -> int:
         r = measure(cfg, seconds, Path(tmp))
     print(f"lockstep HIL loop over {cfg.get('interface')} {cfg.get('channel')}, one pma-fw-host node, "
           f"{seconds:g} s per variant")
-    print(f"{'variant':9s} {'steps/s':>9s} {'us/step':>9s} {'added us':>9s}  to")
+    per = r["steps_per_s_per_round"]
+    print(f"{'variant':9s} {'steps/s':>9s} {'rounds':>11s} {'us/step':>9s} {'added us':>9s}  to")
     for k, v in r["steps_per_s"].items():
         base = ADDED_TO.get(k)
         added = "" if base is None else f"{r['added_us_per_step'][k]:9.0f}  {base}"
-        print(f"{k:9s} {v:9.0f} {r['us_per_step'][k]:9.0f} {added}")
+        rounds = f"{min(per[k]):.0f}-{max(per[k]):.0f}"
+        print(f"{k:9s} {v:9.0f} {rounds:>11s} {r['us_per_step'][k]:9.0f} {added}")
     print(f"rig.step(1 ms) alone: {r['rig_step_us_alone']:.0f} us")
     sp = r["runner_us_per_step"]
     print(f"runner step: {sp['recv_wait_s']:.0f} us in bus.recv (the node's tick, its telemetry and heartbeat "
           f"frames, the guest's scheduling), {sp['rig_s']:.0f} us rig + recording, {sp['other_s']:.0f} us the rest "
           f"(encode, send, decode, log, events); timed on every {TIMED_EVERY}th tick, each part with a clock read "
           f"of its own (a system call: about 70 us in the vcan guest)")
-    print(f"runner / raw round trip: {100 * r['runner_vs_raw']:.0f} % (the node IDLE: its PLANT_ACTUATOR only)")
+
+    def spread(a: str, b: str) -> str:
+        rs = sorted(100 * x / y for x, y in zip(per[a], per[b]))
+        return f"rounds {rs[0]:.0f}-{rs[-1]:.0f} %"
+    print(f"runner / raw round trip: {100 * r['runner_vs_raw']:.0f} % ({spread('runner', 'raw')}; "
+          "the node IDLE: its PLANT_ACTUATOR only)")
     ratio = r["runner_vs_raw_telem"]
-    print(f"runner / raw+telem: {100 * ratio:.0f} % (the same frames as the runner's: the runner's own cost)")
+    print(f"runner / raw+telem: {100 * ratio:.0f} % ({spread('runner', 'raw+telem')}; the same frames as the "
+          "runner's: the runner's own cost)")
     if ratio < 0.8:
         print(f"the runner's own step costs more than 20 % of its traffic's raw round trip: "
               f"{r['us_per_step']['runner'] - r['us_per_step']['raw+telem']:.0f} us per step")

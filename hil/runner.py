@@ -48,7 +48,7 @@ from .summary import PHASE_ARMED, PHASE_IDLE, PHASE_RUNNING, TELEM_FIELDS, LaneR
 
 REPLY_TIMEOUT_S = 10.0
 LOCKSTEP_WATCHDOG_MS = 10000  # pma-fw-host --watchdog-ms for HIL nodes (wall time; see _start_firmware)
-TIMED_EVERY = 16              # the benchmark's split of a tick is timed on every 16th tick
+TIMED_EVERY = 64              # the benchmark's split of a tick is timed on every 64th tick (4 clock reads)
 
 
 class ReplyWait:
