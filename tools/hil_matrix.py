@@ -220,16 +220,22 @@ def main() -> int:
     ap.add_argument("--matrix", choices=sorted(MATRICES) + ["variants", "random"], required=True)
     ap.add_argument("--jobs", type=int, default=1, help="runs at a time (default 1)")
     ap.add_argument("--out", type=Path, help="keep each run's summary JSON in this folder")
-    ap.add_argument("--seed", type=int, default=1, help="--matrix random: the draw's seed (default 1)")
-    ap.add_argument("--count", type=int, default=8, help="--matrix random: how many rigs (default 8)")
+    ap.add_argument("--seed", type=int, help="--matrix random: the draw's seed (default 1)")
+    ap.add_argument("--count", type=int, help="--matrix random: how many rigs (default 8)")
     ap.add_argument("--quick", action="store_true", help="Case 3's --quick run (its first 60 s)")
     args = ap.parse_args()
     if args.jobs < 1:
         ap.error("--jobs must be at least 1")
+    if args.matrix != "random" and (args.seed is not None or args.count is not None):
+        ap.error("--seed and --count go with --matrix random only")
+    args.seed = 1 if args.seed is None else args.seed
+    args.count = 8 if args.count is None else args.count
     if args.count < 1:
         ap.error("--count must be at least 1")
     if args.seed < 0:
         ap.error("--seed must be >= 0")
+    if args.out is not None and args.out.exists() and not args.out.is_dir():
+        ap.error(f"--out {args.out}: exists and is not a folder")
     out = args.out or Path(tempfile.mkdtemp(prefix="hil_matrix_"))
     out.mkdir(parents=True, exist_ok=True)
     jobs: list[tuple[str, str, list[str]]] = []

@@ -153,6 +153,11 @@ def main() -> int:
     ap.add_argument("--markdown", type=Path, help="also write the report to this file")
     args = ap.parse_args()
     presets = [p for p in args.presets.split(",") if p]
+    if not presets:
+        ap.error("--presets names no preset (choose from " + ", ".join(PRESETS) + ")")
+    if args.markdown is not None and (str(args.markdown) == "" or args.markdown.is_dir()
+                                      or not args.markdown.parent.is_dir()):
+        ap.error(f"--markdown {str(args.markdown)!r}: not a file in an existing folder")
     unknown = [p for p in presets if p not in PRESETS]
     if unknown:
         ap.error(f"unknown preset(s): {', '.join(unknown)} (choose from {', '.join(PRESETS)})")

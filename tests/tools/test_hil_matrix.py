@@ -75,11 +75,16 @@ def test_random_rigs_are_repeatable_valid_and_within_their_spans():
         params.validate()
 
 
-def test_bad_options_exit_2():
+def test_bad_options_exit_2(tmp_path):
+    a_file = tmp_path / "a_file"
+    a_file.write_text("")
     for args in (["--matrix", "eleven"], ["--matrix", "ten", "--jobs", "0"], [],
-                 ["--matrix", "random", "--count", "0"], ["--matrix", "random", "--seed", "-1"]):
+                 ["--matrix", "random", "--count", "0"], ["--matrix", "random", "--seed", "-1"],
+                 ["--matrix", "ten", "--seed", "3"], ["--matrix", "seven", "--count=2"],
+                 ["--matrix", "random", "--out", str(a_file)]):
         r = subprocess.run([sys.executable, str(TOOL), *args], capture_output=True, text=True)
         assert r.returncode == 2, (args, r.stderr)
+        assert "Traceback" not in r.stderr
 
 
 @pytest.mark.skipif(not offline.LIB_PATH.exists(), reason="libpma_offline.so not built")
