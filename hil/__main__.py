@@ -14,7 +14,6 @@ failed); 2 bad command line or scenario file; 3 CAN interface problem;
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import signal
 import subprocess
@@ -23,19 +22,22 @@ from pathlib import Path
 from typing import Any
 
 from . import scenario as scn
+from .options import OptionError, out_dir, positive_number
 
 REPO = Path(__file__).resolve().parents[1]
 WITH_VCAN = REPO / "hil" / "with-vcan"
 
 
-def _bus_config(args: argparse.Namespace) -> dict[str, Any] | None:
-    """The python-can configuration (None, with the reason printed, when it is invalid)."""
-    from pmactl.client import InterfaceError, bus_config
+def _bus_config(args: argparse.Namespace) -> tuple[dict[str, Any] | None, int]:
+    """The python-can configuration, checked as pmactl checks it (pmactl.bus_config: the
+    interface, channel and bit rate, given or from python-can's configuration); else None with
+    the reason printed and the exit status: 2 for a bad value, 3 for a missing driver."""
+    from pmactl.client import BadBusConfig, InterfaceError, bus_config
     try:
-        return bus_config(args.interface, args.channel, args.bitrate)
+        return bus_config(args.interface, args.channel, args.bitrate), 0
     except InterfaceError as e:
         print(f"hil: {e}", file=sys.stderr)
-        return None
+        return None, 2 if isinstance(e, BadBusConfig) else 3
 
 
 def _needs_guest(cfg: dict[str, Any]) -> bool:
@@ -92,7 +94,8 @@ def cmd_run(args: argparse.Namespace, argv: list[str]) -> int:
     from .runner import RunError, Runner, RunOptions
     try:
         sc = scn.load(args.scenario)
-    except scn.ScenarioError as e:
+        out = out_dir("--out", args.out)      # before the bus set-up and a re-run in the vcan guest
+    except (scn.ScenarioError, OptionError) as e:
         print(f"hil: {e}", file=sys.stderr)
         return 2
     if args.controller:
@@ -114,10 +117,9 @@ def cmd_run(args: argparse.Namespace, argv: list[str]) -> int:
     if args.board and len(sc.controllers) != 1:
         print("hil: --board drives one node: choose one controller with --controller LABEL", file=sys.stderr)
         return 2
-    cfg = _bus_config(args)
+    cfg, rc = _bus_config(args)
     if cfg is None:
-        return 3
-    out = Path(args.out)
+        return rc
     if _needs_guest(cfg):
         return _rerun_in_guest(argv, out)
     opts = RunOptions(out=out, quick=args.quick, bus_config=cfg, board=args.board, board_node=args.node,
@@ -144,29 +146,58 @@ def cmd_run(args: argparse.Namespace, argv: list[str]) -> int:
 
 
 def cmd_report(args: argparse.Namespace) -> int:
-    from .report import print_summary, write_figures
+    """Each run directory's summary (and figures): a directory without a readable run summary
+    (or, with --figures, without its signals.npz) is a clear error, exit status 2."""
+    from .report import ReportError, render_summary, write_figures
     rc = 0
     for d in args.dirs:
-        p = Path(d) / "summary.json"
-        if not p.exists():
-            print(f"hil: {p} not found", file=sys.stderr)
+        try:
+            text = render_summary(Path(d))
+            if args.figures and not (Path(d) / "signals.npz").is_file():
+                raise ReportError(f"{Path(d) / 'signals.npz'} not found (--figures needs the run's signals)")
+        except ReportError as e:
+            print(f"hil: {e}", file=sys.stderr)
             rc = 2
             continue
-        print_summary(json.loads(p.read_text()))
+        print(text)
         if args.figures:
-            for f in write_figures(Path(d)):
-                print(f"figure: {f}")
+            try:
+                for f in write_figures(Path(d)):
+                    print(f"figure: {f}")
+            except ReportError as e:
+                print(f"hil: {e}", file=sys.stderr)
+                rc = 2
     return rc
 
 
 def cmd_bench(args: argparse.Namespace, argv: list[str]) -> int:
     from .bench import run_bench
-    cfg = _bus_config(args)
+    try:
+        positive_number("--seconds", args.seconds, hi=3600.0, unit="s")
+        out = out_dir("--out", args.out)
+    except OptionError as e:
+        print(f"hil bench: {e}", file=sys.stderr)
+        return 2
+    cfg, rc = _bus_config(args)
     if cfg is None:
-        return 3
+        return rc
     if _needs_guest(cfg):
-        return _rerun_in_guest(argv, Path(args.out))
-    return run_bench(cfg, args.seconds, Path(args.out))
+        return _rerun_in_guest(argv, out)
+    try:
+        return run_bench(cfg, args.seconds, out)
+    except RuntimeError as e:
+        # one line; the rest (the firmware's output) into a file beside the results
+        first, _, rest = str(e).partition("\n")
+        where = ""
+        if rest.strip():
+            try:
+                out.mkdir(parents=True, exist_ok=True)
+                (out / "bench-error.txt").write_text(str(e) + "\n")
+                where = f" (details: {out / 'bench-error.txt'})"
+            except OSError:
+                pass
+        print(f"hil bench: {first}{where}", file=sys.stderr)
+        return 1
 
 
 def main(argv: list[str] | None = None) -> int:

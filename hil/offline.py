@@ -39,9 +39,10 @@ from typing import Any
 from pmactl.rules import RuleError, set_order
 
 from . import scenario as scn
+from .options import OptionError, out_dir, out_file
 from .report import print_summary
 from .rig import Rig
-from .rig_params import RigParams
+from .rig_params import RigParams, parse_text
 from .scenario import RULE_PARAMS, Scenario, ScenarioError, protocol
 from .summary import PHASE_ARMED, PHASE_IDLE, PHASE_RUNNING, LaneResult, Recorder, jsonable, summarise
 
@@ -451,10 +452,6 @@ def _map(jobs_list: list[tuple[Scenario, int, bool, bool]], jobs: int) -> list[L
 
 
 # -------------------------------------------------------------------- the command --
-class OptionError(ValueError):
-    """A bad command-line option (exit status 2)."""
-
-
 def parse_value(text: str) -> float | int | str:
     """A number (int when written as one), else the text (an enumeration name such as PPC)."""
     t = text.strip()
@@ -494,43 +491,81 @@ def _set_nested(d: dict[str, Any], path: str, value: Any) -> dict[str, Any]:
     return out
 
 
-def with_overrides(sc: Scenario, fw: list[tuple[str, Any]], rig: list[tuple[str, Any]]) -> Scenario:
+@dataclass(frozen=True)
+class Override:
+    """One firmware parameter or rig value changed by an option: its name, its value (a rig
+    value as text is parsed to the parameter's type), and the option as the user wrote it (named
+    in errors: "--set ctrl.u_max", "--grid rig:load.bias_force_n")."""
+    name: str
+    value: Any
+    option: str
+
+    def shown(self) -> str:
+        return f"{self.option}={self.value}"
+
+
+def with_overrides(sc: Scenario, fw: list[Override], rig: list[Override]) -> Scenario:
     """The scenario with firmware parameters (for every controller, over everything the file
-    sets; ref.* into its [reference]) and rig values (dotted RigParams paths) changed.
-    OptionError for a name the firmware or the rig does not have or a value they refuse."""
+    sets; ref.* into its [reference]) and rig values (dotted RigParams paths) changed, and checked
+    as the file was: each value against its parameter (type, range), the rig's values, and every
+    rule between parameters (scenario.check_rules). OptionError naming the option otherwise."""
     proto = protocol()
     reference = dict(sc.reference)
     ctrl_over: dict[str, float | int] = {}
-    for name, value in fw:
+    for o in fw:
+        name, value = o.name, o.value
         if name == "ref.kind":
             kind = str(value).upper()
             if kind not in scn.REFERENCE_KINDS:
-                raise OptionError(f"--set ref.kind: {value!r} not one of {', '.join(scn.REFERENCE_KINDS)}")
+                raise OptionError(f"{o.option}: {value!r} not one of {', '.join(scn.REFERENCE_KINDS)}")
             reference["kind"] = kind
             continue
         try:
             p = proto.param(name)
-        except KeyError as e:
-            raise OptionError(f"--set {name}: the firmware has no such parameter (docs/parameters.md)") from e
+        except (KeyError, ValueError) as e:
+            raise OptionError(f"{o.option}: the firmware has no such parameter (docs/parameters.md)") from e
         if name == "ctrl.mode":
-            raise OptionError("--set ctrl.mode: a lane's mode is its controller's (choose lanes with --controller)")
+            raise OptionError(f"{o.option}: a lane's mode is its controller's (choose lanes with --controller)")
         try:
             v = p.check(value)
         except (ValueError, TypeError) as e:
-            raise OptionError(f"--set {e}") from e
+            raise OptionError(f"{o.option}: {_without_name(str(e), name)}") from e
         if name.startswith("ref."):
             reference[name[4:]] = v
         else:
             ctrl_over[name] = v
     rig_data: dict[str, Any] = json.loads(json.dumps(sc.rig))
-    for path, value in rig:
-        rig_data = _set_nested(rig_data, path, value)
+    for o in rig:
+        try:
+            value = parse_text(o.name, o.value) if isinstance(o.value, str) else o.value
+        except ValueError as e:
+            raise OptionError(f"{o.option}: {_without_name(str(e), o.name)}") from e
+        rig_data = _set_nested(rig_data, o.name, value)
     try:
         RigParams.from_dict(rig_data)
     except (ValueError, TypeError, KeyError) as e:
-        raise OptionError(f"--rig: {e}") from e
+        path = getattr(e, "path", None)
+        named = [o for o in rig if o.name == path or (path or "").startswith(f"{o.name}[")]
+        if named:
+            last, msg = named[-1], str(e)
+            if msg.startswith(f"{last.name} "):
+                msg = msg[len(last.name) + 1:]
+            raise OptionError(f"{last.option}: {msg}") from e
+        raise OptionError(f"{'/'.join(sorted({o.option.split()[0] for o in rig})) or '--rig'}: {e}") from e
     ctrls = [replace(c, params={**c.params, **ctrl_over}) for c in sc.controllers]
-    return replace(sc, reference=reference, rig=rig_data, controllers=ctrls)
+    out = replace(sc, reference=reference, rig=rig_data, controllers=ctrls)
+    if fw or rig:
+        given = ", ".join(o.shown() for o in [*fw, *rig])
+        try:
+            scn.check_rules(given, out)
+        except ScenarioError as e:
+            raise OptionError(str(e)) from e
+    return out
+
+
+def _without_name(message: str, name: str) -> str:
+    """A check's message without its leading "NAME: " (the option already names it)."""
+    return message[len(name) + 2:] if message.startswith(f"{name}: ") else message
 
 
 @dataclass
@@ -542,35 +577,48 @@ class Variant:
 
 def build_variants(sc: Scenario, sets: list[tuple[str, str]], rigs: list[tuple[str, str]],
                    grids: list[str] | None) -> list[Variant]:
-    axes: list[tuple[str, list[Any]]] = []
+    """One scenario per combination of the --grid values, each with --set and --rig on top and
+    checked as a whole (with_overrides); OptionError naming the option that is wrong."""
+    axes: list[tuple[str, list[tuple[str, Any]]]] = []      # name, [(text, parsed value)]
     for g in grids or []:
         if "=" not in g:
             raise OptionError(f"--grid: expected NAME=V1,V2,..., got {g!r}")
         name, vals = g.split("=", 1)
-        values = [parse_value(v) for v in vals.split(",") if v.strip()]
-        if not name.strip() or not values:
+        values = [(v.strip(), parse_value(v)) for v in vals.split(",") if v.strip()]
+        name = name.strip()
+        if not name or not values:
             raise OptionError(f"--grid: expected NAME=V1,V2,..., got {g!r}")
-        axes.append((name.strip(), values))
-    base_fw: list[tuple[str, Any]] = [(k, parse_value(v)) for k, v in sets]
-    base_rig: list[tuple[str, Any]] = [(k, parse_value(v)) for k, v in rigs]
+        if name == "seed":
+            for _, v in values:
+                _seed("--grid seed", v)
+        elif name.startswith("rig:") and not name[4:]:
+            raise OptionError(f"--grid: expected rig:PATH=V1,V2,..., got {g!r}")
+        axes.append((name, values))
+    base_fw = [Override(k, parse_value(v), f"--set {k}") for k, v in sets]
+    base_rig = [Override(k, v, f"--rig {k}") for k, v in rigs]
     out = []
     for combo in itertools.product(*[vals for _, vals in axes]) if axes else [()]:
         fw, rg = list(base_fw), list(base_rig)
         settings: dict[str, Any] = {}
         seed = sc.seed
-        for (name, _), v in zip(axes, combo):
+        for (name, _), (text, v) in zip(axes, combo):
             if name == "seed":
-                if not isinstance(v, int):
-                    raise OptionError(f"--grid seed: {v!r} is not an integer")
-                seed = v
+                seed = _seed("--grid seed", v)
             elif name.startswith("rig:"):
-                rg.append((name[4:], v))
+                rg.append(Override(name[4:], text, f"--grid {name}"))
             else:
-                fw.append((name, v))
+                fw.append(Override(name, v, f"--grid {name}"))
             settings[name] = v
         label = " ".join(f"{k}={v}" for k, v in settings.items())
         out.append(Variant(label, replace(with_overrides(sc, fw, rg), seed=seed), settings))
     return out
+
+
+def _seed(option: str, value: Any) -> int:
+    try:
+        return scn.check_seed(option, value)
+    except ScenarioError as e:
+        raise OptionError(str(e)) from e
 
 
 def sweep_table(variants: list[Variant], summaries: list[dict[str, Any]]) -> str:
@@ -629,7 +677,7 @@ def main(args: argparse.Namespace) -> int:
         if args.jobs < 1:
             raise OptionError("--jobs must be at least 1")
         if args.seed is not None:
-            sc.seed = args.seed
+            sc.seed = _seed("--seed", args.seed)
         if args.duration is not None:
             if not 0 < args.duration <= 3600:
                 raise OptionError("--duration must be in (0, 3600] s")
@@ -637,6 +685,9 @@ def main(args: argparse.Namespace) -> int:
             if not sc.windows_for(sc.duration_s):   # shorter than every window: the whole run
                 sc.windows = [(0.0, sc.duration_s)]
         variants = build_variants(sc, _assignments(args.set, "--set"), _assignments(args.rig, "--rig"), args.grid)
+        # where the results go, checked before anything runs (nothing is written on a refusal)
+        out = out_dir("--out", args.out) if args.out else None
+        json_path = out_file("--json", args.json) if args.json else None
     except (ScenarioError, OptionError) as e:
         print(f"hil offline: {e}", file=sys.stderr)
         return 2
@@ -645,7 +696,6 @@ def main(args: argparse.Namespace) -> int:
     except OfflineError as e:
         print(f"hil offline: {e}", file=sys.stderr)
         return 3
-    out = Path(args.out) if args.out else None
     runs = [v.scenario for v in variants]
     commissionings: list[Any] = []
     needs = sc.needs_commissioning()
@@ -695,8 +745,8 @@ def main(args: argparse.Namespace) -> int:
     if len(variants) > 1 or args.brief:
         print()
         print(sweep_table(variants, summaries))
-    if args.json:
-        Path(args.json).write_text(json.dumps(jsonable(summaries), indent=2) + "\n")
+    if json_path is not None:
+        json_path.write_text(json.dumps(jsonable(summaries), indent=2) + "\n")
         print(f"results: {args.json}")
     if out is not None:
         print(f"results: {out}")

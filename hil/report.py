@@ -4,7 +4,11 @@ the other figures of merit, and PNG figures in the style of the paper's Figs. 4-
 """
 from __future__ import annotations
 
+import contextlib
+import io
+import json
 import math
+import zipfile
 from pathlib import Path
 from typing import Any
 
@@ -81,6 +85,64 @@ def _table(head: list[str], rows: list[list[str]]) -> str:
     return "\n".join([line(head), sep] + [line(r) for r in rows])
 
 
+class ReportError(ValueError):
+    """A run directory without a readable run summary (or signals): what is wrong, in one line."""
+
+
+# What a run's summary.json must hold for its report: key -> the type(s) it must have
+SUMMARY_KEYS: dict[str, tuple[type, ...]] = {
+    "scenario": (str,), "title": (str,), "duration_s": (int, float), "period_s": (int, float),
+    "windows": (list,), "rmste": (dict,), "controllers": (dict,), "state": (dict,), "fault_code": (dict,),
+    "expect": (dict,),
+}
+
+
+def read_summary(run_dir: Path) -> dict[str, Any]:
+    """run_dir/summary.json, checked to be a run summary (ReportError otherwise)."""
+    p = run_dir / "summary.json"
+    if not p.is_file():
+        raise ReportError(f"{p} not found" + ("" if run_dir.is_dir() else f" ({run_dir} is not a directory)"))
+    try:
+        summary: Any = json.loads(p.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
+        raise ReportError(f"{p}: not a readable JSON file: {e}") from e
+    check_summary(summary, str(p))
+    out: dict[str, Any] = summary
+    return out
+
+
+def check_summary(summary: Any, where: str) -> None:
+    if not isinstance(summary, dict):
+        raise ReportError(f"{where}: not a run summary (expected a JSON object, got {type(summary).__name__})")
+    for key, types in SUMMARY_KEYS.items():
+        if key not in summary:
+            raise ReportError(f"{where}: not a run summary (no {key!r})")
+        v = summary[key]
+        if isinstance(v, bool) or not isinstance(v, types):
+            raise ReportError(f"{where}: not a run summary ({key!r} is {type(v).__name__})")
+    if not summary["period_s"] > 0:
+        raise ReportError(f"{where}: not a run summary (period_s {summary['period_s']!r})")
+    for key in ("state", "fault_code", "start_result"):
+        if key not in summary["expect"]:
+            raise ReportError(f"{where}: not a run summary (no expect.{key})")
+    for label, c in summary["controllers"].items():
+        if not isinstance(c, dict):
+            raise ReportError(f"{where}: not a run summary (controllers.{label} is {type(c).__name__})")
+
+
+def render_summary(run_dir: Path) -> str:
+    """print_summary's text of a run directory's summary.json (ReportError: nothing printed)."""
+    where = str(run_dir / "summary.json")
+    summary = read_summary(run_dir)
+    buf = io.StringIO()
+    try:
+        with contextlib.redirect_stdout(buf):
+            print_summary(summary)
+    except (KeyError, TypeError, ValueError, AttributeError, IndexError) as e:
+        raise ReportError(f"{where}: not a run summary as hil writes it ({type(e).__name__}: {e})") from e
+    return buf.getvalue().rstrip("\n")
+
+
 def print_summary(summary: dict[str, Any]) -> None:
     q = " (quick)" if summary.get("quick") else ""
     print(f"\n== {summary['scenario']}{q}: {summary['title']}")
@@ -105,19 +167,28 @@ def print_summary(summary: dict[str, Any]) -> None:
 
 
 # ------------------------------------------------------------------ figures --
-def write_figures(out: Path) -> list[Path]:
-    """fig_tracking.png (the paper's Figs. 4-8 panels for every controller of the run)."""
-    import json
+# the signals of each lane the figure plots (signals.npz: LABEL__KEY)
+FIGURE_SIGNALS = ("t_s", "run_step", "x_meas_cm", "e_cm", "v_true_cm_s", "p_kpa", "xr_cm")
 
+
+def write_figures(out: Path) -> list[Path]:
+    """fig_tracking.png (the paper's Figs. 4-8 panels for every controller of the run).
+    ReportError for a summary or signals that cannot be read."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    summary = json.loads((out / "summary.json").read_text())
-    data = np.load(out / "signals.npz")
+    summary = read_summary(out)
+    try:
+        data = np.load(out / "signals.npz")
+    except (OSError, ValueError, zipfile.BadZipFile) as e:
+        raise ReportError(f"{out / 'signals.npz'}: not readable signals: {e}") from e
     labels = [k for k in summary["controllers"] if f"{k}__t_s" in data and len(data[f"{k}__t_s"])]
     if not labels:
         return []
+    missing = [f"{label}__{key}" for label in labels for key in FIGURE_SIGNALS if f"{label}__{key}" not in data]
+    if missing:
+        raise ReportError(f"{out / 'signals.npz'}: not a run's signals (no {', '.join(missing[:3])})")
     lo, hi = None, None
     fig, ax = plt.subplots(5, 1, figsize=(10, 12), sharex=True)
     for label in labels:

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import numbers
 from dataclasses import dataclass, field
 from typing import Any, Mapping
 
@@ -300,6 +301,8 @@ class RigParams:
         not ignored."""
         data = dict(data or {})
         name = data.get("profile", "nominal")
+        if not isinstance(name, str):
+            raise RigParamError("profile", f"rig.profile: expected a profile's name (text), got {name!r}")
         if name != "nominal":
             from .rig_profiles import profile_dict  # here: rig_profiles imports this module
 
@@ -348,38 +351,114 @@ class RigParams:
         }
 
     def validate(self) -> None:
-        m, ld, r, s = self.muscle, self.load, self.regulator, self.sensor
-        checks = [
-            (ld.mass_kg > 0, "load.mass_kg must be > 0"),
-            (m.stiffness_scale > 0, "muscle.stiffness_scale must be > 0"),
-            (m.length_mm > 0, "muscle.length_mm must be > 0"),
-            (m.b_contract_ns_per_mm > 0 and m.b_relax_ns_per_mm > 0, "damping must be > 0"),
-            (m.b_blend_mm_s > 0 and m.f_clip_width_n > 0 and m.k_blend_kpa > 0, "smoothing widths must be > 0"),
-            (m.hyst_force_n >= 0 and m.hyst_ramp_n > 0, "muscle.hyst_force_n >= 0, hyst_ramp_n > 0"),
-            (len(m.hyst_delta_mm) == len(m.hyst_weights) and all(d > 0 for d in m.hyst_delta_mm),
-             "hyst_delta_mm (> 0) and hyst_weights need the same length"),
-            (r.tau_s > 0 and r.dead_time_s >= 0, "regulator.tau_s > 0, dead_time_s >= 0"),
-            (0 <= r.p_min_kpa < r.p_max_kpa, "regulator pressure range"),
-            (r.dac_counts_per_kpa != 0, "regulator.dac_counts_per_kpa must not be 0"),
-            (s.span_cm > 0 and s.i_max_ma > s.i_min_ma, "sensor range"),
-            (s.noise_cm >= 0 and s.adc_noise_counts >= 0 and s.tau_s >= 0, "sensor noise, tau >= 0"),
-            (self.substep_s > 0, "substep_s must be > 0"),
-            (math.isfinite(self.p0_kpa), "p0_kpa must be finite"),
-        ]
+        """ValueError naming the first value that is not finite or outside its physical range
+        (RigParamError: its .path is the dotted name, e.g. load.bias_force_n)."""
+        for path, value in _numbers(self, ""):
+            if not math.isfinite(value):
+                raise RigParamError(path, f"{path} must be finite, got {value!r}")
+        m, ld, r, s, d = self.muscle, self.load, self.regulator, self.sensor, self.drift
         v, c = self.valve, self.creep
-        checks += [
-            (v.model in ("lag", "flow"), "valve.model must be 'lag' or 'flow'"),
-            (v.dead_time_rise_s >= 0 and v.dead_time_fall_s >= 0, "valve dead times >= 0"),
-            (v.fill_rate_kpa_s > 0 and v.exhaust_rate_kpa_s > 0 and v.p_band_kpa > 0, "valve rates, band > 0"),
-            (0 <= v.b_critical < 1 and v.supply_kpa > 0 and v.atm_kpa > 0, "valve b in [0, 1), pressures > 0"),
-            (0 <= v.slow_weight_rise < 1 and 0 <= v.slow_weight_fall < 1, "valve slow weights in [0, 1)"),
-            (v.slow_tau_rise_s > 0 and v.slow_tau_fall_s > 0 and v.polytropic_n >= 1, "valve slow taus > 0, n >= 1"),
-            (0 <= c.frac_contract < 1 and 0 <= c.frac_relax < 1, "creep fractions in [0, 1)"),
-            (c.tau_contract_s > 0 and c.tau_relax_s > 0 and c.blend_n > 0, "creep taus, blend > 0"),
+        checks: list[tuple[bool, str, str]] = [
+            (m.length_mm > 0, "muscle.length_mm", "must be > 0"),
+            (m.f1_n_per_kpa > 0, "muscle.f1_n_per_kpa", "must be > 0 (the force rises with the pressure)"),
+            (m.stiffness_scale > 0, "muscle.stiffness_scale", "must be > 0"),
+            (m.k_break_kpa >= 0, "muscle.k_break_kpa", "must be >= 0"),
+            (m.b_contract_ns_per_mm > 0, "muscle.b_contract_ns_per_mm", "must be > 0 (damping)"),
+            (m.b_relax_ns_per_mm > 0, "muscle.b_relax_ns_per_mm", "must be > 0 (damping)"),
+            (m.b_blend_mm_s > 0, "muscle.b_blend_mm_s", "must be > 0 (a smoothing width)"),
+            (m.f_clip_width_n > 0, "muscle.f_clip_width_n", "must be > 0 (a smoothing width)"),
+            (m.k_blend_kpa > 0, "muscle.k_blend_kpa", "must be > 0 (a smoothing width)"),
+            (m.hyst_force_n >= 0, "muscle.hyst_force_n", "must be >= 0"),
+            (m.hyst_ramp_n > 0, "muscle.hyst_ramp_n", "must be > 0"),
+            (len(m.hyst_delta_mm) == len(m.hyst_weights), "muscle.hyst_weights",
+             "hyst_delta_mm (> 0) and hyst_weights need the same length"),
+            (all(dl > 0 for dl in m.hyst_delta_mm), "muscle.hyst_delta_mm", "every element must be > 0"),
+            (all(w >= 0 for w in m.hyst_weights), "muscle.hyst_weights", "every element must be >= 0"),
+            (ld.mass_kg > 0, "load.mass_kg", "must be > 0"),
+            (-90 <= ld.incline_deg <= 90, "load.incline_deg", "must be in [-90, 90]"),
+            (ld.g_m_s2 >= 0, "load.g_m_s2", "must be >= 0"),
+            (ld.disturbance_tau_s >= 0, "load.disturbance_tau_s", "must be >= 0"),
+            (r.fs_kpa > 0, "regulator.fs_kpa", "must be > 0"),
+            (r.p_min_kpa >= 0, "regulator.p_min_kpa", "must be >= 0 (regulator pressure range)"),
+            (r.p_min_kpa < r.p_max_kpa, "regulator.p_max_kpa", "must be > regulator.p_min_kpa "
+                                                               "(regulator pressure range)"),
+            (r.tau_s > 0, "regulator.tau_s", "must be > 0"),
+            (r.dead_time_s >= 0, "regulator.dead_time_s", "must be >= 0"),
+            (-1 < r.linearity_frac_fs < 1, "regulator.linearity_frac_fs", "must be in (-1, 1)"),
+            (0 <= r.hysteresis_frac_fs < 1, "regulator.hysteresis_frac_fs", "must be in [0, 1)"),
+            (r.dac_counts_per_kpa != 0, "regulator.dac_counts_per_kpa", "must not be 0"),
+            (1 <= r.dac_bits <= 24, "regulator.dac_bits", "must be 1..24"),
+            (s.span_cm > 0, "sensor.span_cm", "must be > 0 (sensor range)"),
+            (s.i_min_ma >= 0, "sensor.i_min_ma", "must be >= 0"),
+            (s.i_max_ma > s.i_min_ma, "sensor.i_max_ma", "must be > sensor.i_min_ma (sensor range)"),
+            (s.out_of_range_ma >= 0, "sensor.out_of_range_ma", "must be >= 0"),
+            (s.wire_break_ma >= 0, "sensor.wire_break_ma", "must be >= 0"),
+            (s.shunt_ohm > 0, "sensor.shunt_ohm", "must be > 0"),
+            (s.adc_vref_v > 0, "sensor.adc_vref_v", "must be > 0"),
+            (1 <= s.adc_bits <= 24, "sensor.adc_bits", "must be 1..24"),
+            (s.noise_cm >= 0, "sensor.noise_cm", "must be >= 0"),
+            (s.adc_noise_counts >= 0, "sensor.adc_noise_counts", "must be >= 0"),
+            (s.tau_s >= 0, "sensor.tau_s", "must be >= 0"),
+            (d.temp_rate_k_per_s >= 0, "drift.temp_rate_k_per_s", "must be >= 0"),
+            (d.temp_max_rise_k >= 0, "drift.temp_max_rise_k", "must be >= 0"),
+            (v.model in ("lag", "flow"), "valve.model", "must be 'lag' or 'flow'"),
+            (v.dead_time_rise_s >= 0, "valve.dead_time_rise_s", "must be >= 0"),
+            (v.dead_time_fall_s >= 0, "valve.dead_time_fall_s", "must be >= 0"),
+            (v.fill_rate_kpa_s > 0, "valve.fill_rate_kpa_s", "must be > 0"),
+            (v.exhaust_rate_kpa_s > 0, "valve.exhaust_rate_kpa_s", "must be > 0"),
+            (v.p_band_kpa > 0, "valve.p_band_kpa", "must be > 0"),
+            (0 <= v.b_critical < 1, "valve.b_critical", "must be in [0, 1)"),
+            (v.supply_kpa > 0, "valve.supply_kpa", "must be > 0"),
+            (v.atm_kpa > 0, "valve.atm_kpa", "must be > 0"),
+            (0 <= v.slow_weight_rise < 1, "valve.slow_weight_rise", "must be in [0, 1)"),
+            (0 <= v.slow_weight_fall < 1, "valve.slow_weight_fall", "must be in [0, 1)"),
+            (v.slow_tau_rise_s > 0, "valve.slow_tau_rise_s", "must be > 0"),
+            (v.slow_tau_fall_s > 0, "valve.slow_tau_fall_s", "must be > 0"),
+            (v.polytropic_n >= 1, "valve.polytropic_n", "must be >= 1"),
+            (0 <= c.frac_contract < 1, "creep.frac_contract", "must be in [0, 1)"),
+            (0 <= c.frac_relax < 1, "creep.frac_relax", "must be in [0, 1)"),
+            (c.tau_contract_s > 0, "creep.tau_contract_s", "must be > 0"),
+            (c.tau_relax_s > 0, "creep.tau_relax_s", "must be > 0"),
+            (c.blend_n > 0, "creep.blend_n", "must be > 0"),
+            (r.p_min_kpa <= self.p0_kpa <= r.p_max_kpa, "p0_kpa",
+             f"must be within the regulator's range {r.p_min_kpa:g}..{r.p_max_kpa:g} kPa"),
+            (self.initial_p_kpa is None or r.p_min_kpa <= self.initial_p_kpa <= r.p_max_kpa, "initial_p_kpa",
+             f"must be within the regulator's range {r.p_min_kpa:g}..{r.p_max_kpa:g} kPa"),
+            (self.substep_s > 0, "substep_s", "must be > 0"),
         ]
-        for ok, msg in checks:
+        for ok, path, msg in checks:
             if not ok:
-                raise ValueError(msg)
+                value = _get(self, path)
+                raise RigParamError(path, f"{path} {msg}, got {value!r}")
+
+
+class RigParamError(ValueError):
+    """A rig value of the wrong type or outside its range; path: its dotted name."""
+
+    def __init__(self, path: str, message: str) -> None:
+        super().__init__(message)
+        self.path = path
+
+
+def _get(obj: Any, path: str) -> Any:
+    for part in path.split("."):
+        obj = getattr(obj, part)
+    return obj
+
+
+def _numbers(obj: Any, prefix: str) -> list[tuple[str, float]]:
+    """Every number of a parameter group (nested groups and tuples' elements included), by path."""
+    out: list[tuple[str, float]] = []
+    for f in dataclasses.fields(obj):
+        value = getattr(obj, f.name)
+        path = f"{prefix}{f.name}"
+        if dataclasses.is_dataclass(value):
+            out += _numbers(value, f"{path}.")
+        elif isinstance(value, tuple):
+            out += [(f"{path}[{i}]", float(x)) for i, x in enumerate(value)]
+        elif isinstance(value, (int, float)) and not isinstance(value, bool):
+            out.append((path, float(value)))
+    return out
 
 
 def _merge_tables(base: Mapping[str, Any], over: Mapping[str, Any]) -> dict[str, Any]:
@@ -391,27 +470,88 @@ def _merge_tables(base: Mapping[str, Any], over: Mapping[str, Any]) -> dict[str,
     return out
 
 
+def _is_number(value: Any) -> bool:
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)
+
+
+def _typed(where: str, current: Any, value: Any) -> Any:
+    """value as the type of the field's default `current` (a TOML/JSON value): a number for a
+    number (an integer for an int field), true/false for a bool, text for text, an array of
+    numbers for a tuple. RigParamError otherwise (no silent conversion: "false" is not False)."""
+    if isinstance(current, bool):
+        if not isinstance(value, bool):
+            raise RigParamError(where, f"{where}: expected true or false, got {value!r}")
+        return bool(value)
+    if isinstance(current, tuple):
+        if not isinstance(value, (list, tuple)) or not all(_is_number(x) for x in value):
+            raise RigParamError(where, f"{where}: expected an array of numbers, got {value!r}")
+        return tuple(float(x) for x in value)
+    if isinstance(current, int):
+        if not _is_number(value) or not float(value).is_integer():
+            raise RigParamError(where, f"{where}: expected an integer, got {value!r}")
+        return int(value)
+    if current is None or isinstance(current, float):
+        if value is None and current is None:
+            return None
+        if not _is_number(value):
+            raise RigParamError(where, f"{where}: expected a number, got {value!r}")
+        return float(value)
+    if isinstance(current, str):
+        if not isinstance(value, str):
+            raise RigParamError(where, f"{where}: expected text, got {value!r}")
+        return value
+    raise RigParamError(where, f"{where}: cannot be set")      # pragma: no cover (every field is one of the above)
+
+
 def _from_dict(cls: type, data: Mapping[str, Any], where: str) -> Any:
     if not isinstance(data, Mapping):
-        raise ValueError(f"{where}: expected a table, got {type(data).__name__}")
+        raise RigParamError(where, f"{where}: expected a table, got {type(data).__name__}")
     fields = {f.name: f for f in dataclasses.fields(cls)}
     unknown = set(data) - set(fields)
     if unknown:
-        raise ValueError(f"{where}: unknown parameter(s) {sorted(unknown)}")
+        raise RigParamError(where, f"{where}: unknown parameter(s) {sorted(unknown)}")
     kwargs: dict[str, Any] = {}
     defaults = cls()
     for name, value in data.items():
         current = getattr(defaults, name)
         if dataclasses.is_dataclass(current):
             kwargs[name] = _from_dict(type(current), value, f"{where}.{name}")
-        elif isinstance(current, tuple):
-            kwargs[name] = tuple(float(v) for v in value)
-        elif isinstance(current, bool):
-            kwargs[name] = bool(value)
-        elif isinstance(current, int) and not isinstance(current, bool):
-            kwargs[name] = int(value)
-        elif current is None or isinstance(current, float):
-            kwargs[name] = None if value is None else float(value)
         else:
-            kwargs[name] = value
+            kwargs[name] = _typed(f"{where}.{name}", current, value)
     return cls(**kwargs)
+
+
+def parse_text(path: str, text: str) -> Any:
+    """A rig value given as text on a command line (`--rig load.bias_force_n=5`), as the type of
+    the parameter at the dotted `path`: a number, an integer, true/false (also 1/0) for a bool,
+    text. RigParamError for an unknown path, a group, a list or text of another type."""
+    current: Any = RigParams()
+    for part in path.split("."):
+        if not dataclasses.is_dataclass(current) or part not in {f.name for f in dataclasses.fields(current)}:
+            raise RigParamError(path, f"{path}: no such rig parameter (hil/rig_params.py, docs/rig.md)")
+        current = getattr(current, part)
+    t = text.strip()
+    if dataclasses.is_dataclass(current):
+        raise RigParamError(path, f"{path}: a group of rig parameters, not one (e.g. {path}."
+                                  f"{dataclasses.fields(current)[0].name})")
+    if isinstance(current, bool):
+        low = t.lower()
+        if low in ("true", "1"):
+            return True
+        if low in ("false", "0"):
+            return False
+        raise RigParamError(path, f"{path}: expected true or false (or 1 or 0), got {t!r}")
+    if isinstance(current, tuple):
+        raise RigParamError(path, f"{path}: an array: set it in a scenario file's [rig] table")
+    if isinstance(current, str):
+        return t
+    kind = "an integer" if isinstance(current, int) else "a number"
+    try:
+        number = float(t)
+    except ValueError:
+        raise RigParamError(path, f"{path}: expected {kind}, got {t!r}") from None
+    if isinstance(current, int):
+        if not number.is_integer():
+            raise RigParamError(path, f"{path}: expected {kind}, got {t!r}")
+        return int(number)
+    return number

@@ -56,6 +56,7 @@ from typing import Any
 from pmactl.protocol import Protocol, load_protocol
 from pmactl.rules import broken_rule
 
+from .report import PAPER
 from .rig_params import RigParams
 
 # the parameters the rules a SET enforces involve (docs/parameters.md, rules 1-5)
@@ -238,15 +239,20 @@ def _read(path: Path, seen: tuple[Path, ...] = ()) -> dict[str, Any]:
     if path in seen:
         raise ScenarioError(f"{path}: base files include each other")
     try:
-        data = tomllib.loads(path.read_text())
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
     except tomllib.TOMLDecodeError as e:
         raise ScenarioError(f"{path}: not valid TOML: {e}") from e
+    except UnicodeDecodeError as e:
+        raise ScenarioError(f"{path}: not UTF-8 text (TOML is UTF-8): at byte {e.start}") from e
     except OSError as e:
-        raise ScenarioError(f"{path}: {e.strerror}") from e
+        raise ScenarioError(f"{path}: {e.strerror or e}") from e
     base = data.pop("base", None)
     if base is None:
         return data
-    return _merge(_read(path.parent / str(base), (*seen, path)), data)
+    base_path = path.parent / _text(f"{path}: base", base)
+    if not base_path.is_file():
+        raise ScenarioError(f"{path}: base: no file {base_path}")
+    return _merge(_read(base_path, (*seen, path)), data)
 
 
 def load(name_or_path: str) -> Scenario:
@@ -256,12 +262,89 @@ def load(name_or_path: str) -> Scenario:
     return parse(data, path)
 
 
+# ------------------------------------------------------- the file's schema --
+# Every value of a scenario file goes through one of these typed checks: a wrong type or a
+# value outside its range is a ScenarioError naming the key and what it expects.
+SEED_MAX = 2**63 - 1                # numpy's generator takes any non-negative integer; JSON keeps 63 bits
+# events whose value is a switch: 1 on, 0 off (EVENT_ACTIONS)
+SWITCH_EVENTS = ("wire_break", "sensor_block", "host_heartbeat")
+
+
+def _type_name(v: Any) -> str:
+    return {dict: "a table", list: "an array", str: "text", bool: "true/false"}.get(type(v), type(v).__name__)
+
+
 def _num(where: str, v: Any, lo: float = -math.inf, hi: float = math.inf) -> float:
     if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
         raise ScenarioError(f"{where}: expected a finite number, got {v!r}")
     if not lo <= v <= hi:
         raise ScenarioError(f"{where}: {v} outside [{lo:g}, {hi:g}]")
     return float(v)
+
+
+def _text(where: str, v: Any, choices: tuple[str, ...] | None = None, upper: bool = False) -> str:
+    """Text (upper: case-insensitive, returned in upper case), one of `choices` if given."""
+    if not isinstance(v, str):
+        raise ScenarioError(f"{where}: expected text{_one_of(choices)}, got {_type_name(v)} {v!r}")
+    t = v.upper() if upper else v
+    if choices is not None and t not in choices:
+        raise ScenarioError(f"{where}: {v!r} is not{_one_of(choices)[1:]}")
+    return t
+
+
+def _one_of(choices: tuple[str, ...] | None) -> str:
+    return "" if choices is None else f", one of {', '.join(choices)}"
+
+
+def _flag(where: str, v: Any) -> bool:
+    if not isinstance(v, bool):
+        raise ScenarioError(f"{where}: expected true or false, got {v!r}")
+    return v
+
+
+def _table(where: str, v: Any) -> dict[str, Any]:
+    if not isinstance(v, dict):
+        raise ScenarioError(f"{where}: expected a table, got {_type_name(v)} {v!r}")
+    return v
+
+
+def _array(where: str, v: Any, of_tables: bool = False) -> list[Any]:
+    if not isinstance(v, list):
+        raise ScenarioError(f"{where}: expected an array{' of tables' if of_tables else ''}, "
+                            f"got {_type_name(v)} {v!r}")
+    if of_tables:
+        for i, item in enumerate(v):
+            _table(f"{where}[{i}]", item)
+    return v
+
+
+def _keys(where: str, table: dict[str, Any], allowed: set[str]) -> None:
+    unknown = set(table) - allowed
+    if unknown:
+        raise ScenarioError(f"{where}: unknown key(s) {', '.join(sorted(unknown))} "
+                            f"(known: {', '.join(sorted(allowed))})")
+
+
+def check_seed(where: str, v: Any) -> int:
+    """The rig's sensor-noise seed: an integer 0..SEED_MAX (ScenarioError otherwise)."""
+    if isinstance(v, bool) or not isinstance(v, int) or not 0 <= v <= SEED_MAX:
+        raise ScenarioError(f"{where}: expected an integer >= 0 (at most 2**63 - 1), got {v!r}")
+    return v
+
+
+def result_names() -> tuple[str, ...]:
+    """The names a command's result can have (COMMAND_ACK Result: OK, BAND, ...)."""
+    return tuple(protocol().status_names.values())
+
+
+def check_rig(where: str, rig: Any) -> dict[str, Any]:
+    """A [rig] table: every value typed and in range (RigParams.from_dict)."""
+    table = _table(where, rig)
+    try:
+        RigParams.from_dict(table)
+    except (ValueError, TypeError) as e:
+        raise ScenarioError(f"{where}: {e}") from e
+    return table
 
 
 def _check_params(where: str, params: Any) -> dict[str, float | int]:
@@ -283,63 +366,77 @@ def _check_params(where: str, params: Any) -> dict[str, float | int]:
     return out
 
 
+def _event(ew: str, ev: dict[str, Any], duration: float) -> Event:
+    _keys(ew, ev, {"t_s", "action", "value"})
+    for key in ("t_s", "action", "value"):
+        if key not in ev:
+            raise ScenarioError(f"{ew}: missing {key!r}")
+    action = _text(f"{ew}.action", ev["action"], tuple(EVENT_ACTIONS))
+    t_s = _num(f"{ew}.t_s", ev["t_s"], 0.0, duration)
+    if action in SWITCH_EVENTS:
+        value = ev["value"]
+        if isinstance(value, bool) or value not in (0, 1):
+            raise ScenarioError(f"{ew}.value: expected 1 or 0 for {action} ({EVENT_ACTIONS[action]}), "
+                                f"got {value!r}")
+        return Event(t_s, action, float(value))
+    value_f = _num(f"{ew}.value", ev["value"], -1e4, 1e4)
+    if action == "load_mass" and not value_f > 0:
+        raise ScenarioError(f"{ew}.value: load_mass must be > 0 kg, got {value_f:g}")
+    return Event(t_s, action, value_f)
+
+
 def parse(data: dict[str, Any], path: Path | None = None) -> Scenario:
     where = str(path) if path else "scenario"
-    unknown = set(data) - _TOP_KEYS
-    if unknown:
-        raise ScenarioError(f"{where}: unknown key(s) {', '.join(sorted(unknown))}")
+    data = _table(where, data)
+    _keys(where, data, _TOP_KEYS)
     for key in ("name", "duration_s", "controllers"):
         if key not in data:
             raise ScenarioError(f"{where}: missing {key!r}")
+    name = _text(f"{where}: name", data["name"])
+    title = _text(f"{where}: title", data.get("title", name))
+    description = _text(f"{where}: description", data.get("description", ""))
+    paper = data.get("paper")
+    if paper is not None:
+        paper = _text(f"{where}: paper", paper, tuple(PAPER))
+    seed = check_seed(f"{where}: seed", data.get("seed", 1))
     duration = _num(f"{where}: duration_s", data["duration_s"], 0.01, 3600.0)
     quick = _num(f"{where}: quick_duration_s", data.get("quick_duration_s", min(duration, 10.0)), 0.01, duration)
     windows: list[tuple[float, float]] = []
-    for i, w in enumerate(data.get("windows", [[0.0, duration]])):
+    for i, w in enumerate(_array(f"{where}: windows", data.get("windows", [[0.0, duration]]))):
         if not (isinstance(w, list) and len(w) == 2):
-            raise ScenarioError(f"{where}: windows[{i}] must be [t0, t1]")
+            raise ScenarioError(f"{where}: windows[{i}] must be [t0, t1], got {w!r}")
         t0 = _num(f"{where}: windows[{i}][0]", w[0], 0.0, duration)
         t1 = _num(f"{where}: windows[{i}][1]", w[1], t0, duration)
         if t1 <= t0:
             raise ScenarioError(f"{where}: windows[{i}] is empty")
         windows.append((t0, t1))
 
-    rig = data.get("rig", {})
-    try:
-        RigParams.from_dict(rig)
-    except (ValueError, TypeError) as e:
-        raise ScenarioError(f"{where}: [rig]: {e}") from e
+    rig = check_rig(f"{where}: [rig]", data.get("rig", {}))
 
     params = _check_params(f"{where}: [params]", data.get("params", {}))
-    reference = dict(data.get("reference", {"kind": "HOLD"}))
-    kind = str(reference.get("kind", "HOLD")).upper()
-    if kind not in REFERENCE_KINDS:
-        raise ScenarioError(f"{where}: [reference] kind {kind!r} not one of {', '.join(REFERENCE_KINDS)}")
-    reference["kind"] = kind
+    reference = dict(_table(f"{where}: [reference]", data.get("reference", {"kind": "HOLD"})))
+    reference["kind"] = _text(f"{where}: [reference] kind", reference.get("kind", "HOLD"), REFERENCE_KINDS,
+                              upper=True)
     _check_params(f"{where}: [reference]", {f"ref.{k}": v for k, v in reference.items() if k != "kind"})
 
     controllers: list[Controller] = []
     labels: set[str] = set()
-    raw_ctrls = data["controllers"]
-    if not isinstance(raw_ctrls, list) or not raw_ctrls:
+    raw_ctrls = _array(f"{where}: controllers", data["controllers"], of_tables=True)
+    if not raw_ctrls:
         raise ScenarioError(f"{where}: [[controllers]]: at least one")
     if len(raw_ctrls) > 15:
         raise ScenarioError(f"{where}: at most 15 controllers (one CAN node id each)")
+    modes = tuple(protocol().param("ctrl.mode").values.values())
     for i, c in enumerate(raw_ctrls):
         cw = f"{where}: controllers[{i}]"
-        extra = set(c) - {"label", "mode", "params", "description", "commission"}
-        if extra:
-            raise ScenarioError(f"{cw}: unknown key(s) {', '.join(sorted(extra))}")
-        label = str(c.get("label", ""))
+        _keys(cw, c, {"label", "mode", "params", "description", "commission"})
+        label = _text(f"{cw}.label", c.get("label", ""))
         if not label or not label.replace("-", "").replace("_", "").isalnum() or label in labels:
             raise ScenarioError(f"{cw}: label must be a unique name of letters, digits, - and _")
         labels.add(label)
-        mode = str(c.get("mode", "")).upper()
-        if mode not in protocol().param("ctrl.mode").values.values():
-            raise ScenarioError(f"{cw}: mode {mode!r} is not a ctrl.mode value")
+        mode = _text(f"{cw}.mode", c.get("mode", ""), modes, upper=True)
         cparams = _check_params(f"{cw}.params", c.get("params", {}))
-        commission = c.get("commission", False)
-        if not isinstance(commission, bool):
-            raise ScenarioError(f"{cw}: commission must be true or false")
+        commission = _flag(f"{cw}.commission", c.get("commission", False))
         if commission:
             if mode not in COMMISSION_MODES:
                 raise ScenarioError(f"{cw}: commission = true needs mode {' or '.join(COMMISSION_MODES)}")
@@ -347,52 +444,46 @@ def parse(data: dict[str, Any], path: Path | None = None) -> Scenario:
             if beyond:
                 raise ScenarioError(f"{cw}: a commissioned lane gives only the task's own parameters "
                                     f"({', '.join(COMMISSION_TASK_PARAMS)}); not {', '.join(beyond)}")
-        controllers.append(Controller(label, mode, cparams, str(c.get("description", "")), commission))
+        controllers.append(Controller(label, mode, cparams, _text(f"{cw}.description", c.get("description", "")),
+                                      commission))
 
-    events: list[Event] = []
-    for i, ev in enumerate(data.get("events", [])):
-        ew = f"{where}: events[{i}]"
-        if set(ev) - {"t_s", "action", "value"}:
-            raise ScenarioError(f"{ew}: unknown key(s) {', '.join(sorted(set(ev) - {'t_s', 'action', 'value'}))}")
-        action = str(ev.get("action", ""))
-        if action not in EVENT_ACTIONS:
-            raise ScenarioError(f"{ew}: action {action!r} not one of {', '.join(EVENT_ACTIONS)}")
-        events.append(Event(_num(f"{ew}.t_s", ev.get("t_s"), 0.0, duration),
-                            action, _num(f"{ew}.value", ev.get("value"), -1e4, 1e4)))
+    events = [_event(f"{where}: events[{i}]", ev, duration)
+              for i, ev in enumerate(_array(f"{where}: events", data.get("events", []), of_tables=True))]
     events.sort(key=lambda e: e.t_s)
 
-    ex = data.get("expect", {})
-    if set(ex) - {"state", "fault_code", "start_result"}:
-        raise ScenarioError(f"{where}: [expect]: unknown key(s)")
+    ex = _table(f"{where}: [expect]", data.get("expect", {}))
+    _keys(f"{where}: [expect]", ex, {"state", "fault_code", "start_result"})
     proto = protocol()
-    expect = Expect(str(ex.get("state", "RUNNING")).upper(), str(ex.get("fault_code", "NONE")).upper(),
-                    str(ex.get("start_result", "OK")).upper())
-    if expect.state not in proto.state_names.values():
-        raise ScenarioError(f"{where}: [expect] state {expect.state!r} unknown")
-    if expect.fault_code not in proto.enum_names("HEARTBEAT", "FaultCode").values():
-        raise ScenarioError(f"{where}: [expect] fault_code {expect.fault_code!r} unknown")
+    expect = Expect(
+        _text(f"{where}: [expect] state", ex.get("state", "RUNNING"), tuple(proto.state_names.values()), upper=True),
+        _text(f"{where}: [expect] fault_code", ex.get("fault_code", "NONE"),
+              tuple(proto.enum_names("HEARTBEAT", "FaultCode").values()), upper=True),
+        _text(f"{where}: [expect] start_result", ex.get("start_result", "OK"), result_names(), upper=True))
 
     scenario = Scenario(
-        name=str(data["name"]), title=str(data.get("title", data["name"])),
-        description=str(data.get("description", "")), path=path, duration_s=duration,
-        quick_duration_s=quick, windows=windows, paper=data.get("paper"),
-        seed=int(data.get("seed", 1)), rig=rig, params=params, reference=reference,
-        controllers=controllers, events=events, expect=expect,
+        name=name, title=title, description=description, path=path, duration_s=duration,
+        quick_duration_s=quick, windows=windows, paper=paper, seed=seed, rig=rig, params=params,
+        reference=reference, controllers=controllers, events=events, expect=expect,
         settle_s=_num(f"{where}: settle_s", data.get("settle_s", 0.5), 0.05, 60.0),
         armed_s=_num(f"{where}: armed_s", data.get("armed_s", 1.0), 0.05, 60.0),
     )
-    _check_rules(where, scenario)
+    check_rules(where, scenario)
     return scenario
 
 
-def _check_rules(where: str, scenario: "Scenario") -> None:
+def check_rules(where: str, scenario: "Scenario") -> None:
     """What the node would refuse: every controller's whole set (the defaults, the rig's
     wiring, the scenario's and the controller's parameters) must keep every rule between
-    parameters (docs/parameters.md), the ones SET enforces and the ones ARM checks."""
+    parameters (docs/parameters.md), the ones SET enforces and the ones ARM checks.
+    Run on a file's scenario and again on one changed by options (hil/offline.py)."""
     proto = protocol()
     defaults = {p.name: p.default for p in proto.params}
     for ctrl in scenario.controllers:
-        values = {**defaults, **scenario.node_params(ctrl)}
+        try:
+            node = scenario.node_params(ctrl)
+        except (ValueError, TypeError) as e:     # e.g. the rig's wiring outside a parameter's range
+            raise ScenarioError(f"{where}: controller {ctrl.label}: {e}") from e
+        values = {**defaults, **node}
         rule = broken_rule(values)
         if rule in (6, 8, 11, 12) and ctrl.commission and not ctrl.derived:
             rule = 0        # the input set-up is commissioning's (polarity, p0, u range)

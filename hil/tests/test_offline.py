@@ -144,3 +144,50 @@ def test_a_grid_sweeps_firmware_and_rig_values(tmp_path, capsys):
     assert [r["controllers"]["ppc-paper"]["params_read_back"]["ppc.c"] for r in runs] == [16.0, 16.0, 32.0, 32.0]
     assert len({r["controllers"]["ppc-paper"]["rmste_cm"][0] for r in runs}) == 4
     assert "ppc.c=16 rig:load.bias_force_n=5" in capsys.readouterr().out
+
+
+# --------------------------------- options checked as a whole before anything runs (exit 2) --
+@pytest.mark.parametrize("argv, message", [
+    (["--seed", "-1"], "--seed: expected an integer >= 0"),
+    (["--grid", "seed=-1"], "--grid seed: expected an integer >= 0"),
+    (["--grid", "seed=1.5"], "--grid seed: expected an integer >= 0"),
+    (["--set", "safety.x_min_cm=1"], "--set safety.x_min_cm=1: controller ppc-paper: the parameter set breaks rule 10"),
+    (["--set", "act.polarity=0"], "breaks rule 6"),
+    (["--grid", "ctrl.u_max=100,-900"], "--grid ctrl.u_max=-900: controller ppc-paper: the parameter set breaks rule"),
+    (["--grid", "ctrl.u_max=1,nan"], "--grid ctrl.u_max: nan is not finite"),
+    (["--set", "ctrl.u_max=nan"], "--set ctrl.u_max: nan is not finite"),
+    (["--rig", "contraction_is_negative_x=yes"], "--rig contraction_is_negative_x: expected true or false"),
+    (["--rig", "load.bias_force_n=nan"], "--rig load.bias_force_n: must be finite"),
+    (["--grid", "rig:load.bias_force_n=0,nan"], "--grid rig:load.bias_force_n: must be finite"),
+    (["--rig", "load.mass_kg=heavy"], "--rig load.mass_kg: expected a number"),
+    (["--rig", "load=5"], "--rig load: a group"),
+    (["--rig", "sensor.span_cm=1e9"], "adc.offset_cm"),
+    (["--out", "f"], "--out: f exists and is not a directory"),
+    (["--out", "f/sub"], "--out: f/sub: cannot be made"),
+    (["--json", "no_such_dir/x.json"], "--json: no_such_dir/x.json: no directory"),
+    (["--json", "d"], "--json: d is a directory"),
+])
+def test_bad_offline_options_are_refused_before_the_run(argv, message, tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "f").write_text("a file")
+    (tmp_path / "d").mkdir()
+    ran: list[object] = []
+
+    def run_scenarios(*a, **k):
+        ran.append(a)
+        return []
+    monkeypatch.setattr(offline, "run_scenarios", run_scenarios)
+    assert main(["offline", "case2b", "--controller", "ppc-paper", "--duration", "0.5", "--brief", *argv]) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert not ran and (tmp_path / "f").read_text() == "a file"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d", "f"]          # nothing written
+
+
+def test_a_bool_rig_value_from_the_command_line_is_parsed_strictly():
+    sc = scn.load("case2b")
+    for text, value in (("false", False), ("0", False), ("true", True), ("1", True), ("FALSE", False)):
+        v = offline.build_variants(sc, [], [("contraction_is_negative_x", text)], None)[0]
+        assert v.scenario.rig_params().contraction_is_negative_x is value
+    grid = offline.build_variants(sc, [], [], ["rig:sensor.inverted=false,true"])
+    assert [x.scenario.rig_params().sensor.inverted for x in grid] == [False, True]

@@ -458,3 +458,43 @@ def test_substep_250us_matches_100us():
     fine, coarse = run(1e-4), run(2.5e-4)
     assert np.ptp(fine) > 1.0                      # the command really moves the muscle
     assert np.max(np.abs(fine - coarse)) < 1e-5
+
+
+# ------------------------------------------------------ every value typed and in range --
+@pytest.mark.parametrize("data, message", [
+    ({"load": {"bias_force_n": math.nan}}, "load.bias_force_n must be finite"),
+    ({"load": {"g_m_s2": math.inf}}, "load.g_m_s2 must be finite"),
+    ({"muscle": {"hyst_delta_mm": [0.1, math.nan, 0.5, 1.0]}}, r"muscle.hyst_delta_mm\[1\] must be finite"),
+    ({"initial_p_kpa": math.nan}, "initial_p_kpa must be finite"),
+    ({"load": {"incline_deg": 120.0}}, "load.incline_deg"),
+    ({"sensor": {"shunt_ohm": 0.0}}, "sensor.shunt_ohm"),
+    ({"sensor": {"adc_bits": 0}}, "sensor.adc_bits"),
+    ({"regulator": {"fs_kpa": -1.0}}, "regulator.fs_kpa"),
+    ({"p0_kpa": 2000.0}, "p0_kpa"),
+    ({"contraction_is_negative_x": "false"}, "expected true or false"),
+    ({"sensor": {"inverted": 0}}, "expected true or false"),
+    ({"load": {"mass_kg": "3"}}, "expected a number"),
+    ({"load": {"mass_kg": True}}, "expected a number"),
+    ({"sensor": {"adc_bits": 11.5}}, "expected an integer"),
+    ({"muscle": {"hyst_weights": "abcd"}}, "expected an array of numbers"),
+    ({"valve": {"model": 3}}, "expected text"),
+    ({"profile": 3}, "profile"),
+    ({"load": 5}, "expected a table"),
+])
+def test_every_rig_value_is_typed_finite_and_in_its_range(data, message):
+    with pytest.raises(ValueError, match=message):
+        RigParams.from_dict(data)
+
+
+def test_rig_values_from_the_command_line_are_parsed_by_their_type():
+    from hil.rig_params import parse_text
+    assert parse_text("contraction_is_negative_x", "false") is False
+    assert parse_text("sensor.inverted", "1") is True and parse_text("sensor.inverted", "FALSE") is False
+    assert parse_text("sensor.adc_bits", "11") == 11 and parse_text("load.mass_kg", "3") == 3.0
+    assert parse_text("valve.model", "flow") == "flow"
+    for path, text, message in [("contraction_is_negative_x", "no", "true or false"),
+                                ("sensor.adc_bits", "11.5", "integer"), ("load.mass_kg", "heavy", "number"),
+                                ("load", "5", "group"), ("load.nope", "1", "no such"),
+                                ("muscle.hyst_weights", "1", "array")]:
+        with pytest.raises(ValueError, match=message):
+            parse_text(path, text)

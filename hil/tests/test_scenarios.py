@@ -107,7 +107,7 @@ def test_metrics_on_known_signals():
     (["run", "case1", "--out", "x", "--controller", "nobody"], 2),
     (["run", "case1", "--out", "x", "--node", "99"], 2),
     (["run", "case3", "--out", "x", "--board"], 2),       # a board runs one controller at a time
-    (["run", "case1", "--out", "x", "--controller", "ppc-paper", "--interface", "no_such_interface"], 3),
+    (["run", "case1", "--out", "x", "--controller", "ppc-paper", "--interface", "no_such_interface"], 2),
     (["run", "case1", "--out", "x"], 2),                  # its ppc and mfac lanes need --commission
     (["frobnicate"], 2),
 ])
@@ -126,3 +126,147 @@ def test_list_prints_every_scenario(capsys):
 
 def test_report_of_a_missing_run(tmp_path: Path):
     assert main(["report", str(tmp_path)]) == 2
+
+
+# ----------------------------------------- every value of a file typed: exit 2, never a traceback --
+@pytest.mark.parametrize("change, message", [
+    ({"controllers": [1, 2]}, r"controllers\[0\]: expected a table"),
+    ({"controllers": {"label": "a"}}, "controllers: expected an array"),
+    ({"events": [5]}, r"events\[0\]: expected a table"),
+    ({"events": 5}, "events: expected an array"),
+    ({"expect": 5}, r"\[expect\]: expected a table"),
+    ({"windows": 5}, "windows: expected an array"),
+    ({"windows": [5]}, r"windows\[0\] must be"),
+    ({"reference": 5}, r"\[reference\]: expected a table"),
+    ({"reference": "CASE1"}, r"\[reference\]: expected a table"),
+    ({"reference": {"kind": 3}}, "kind: expected text"),
+    ({"rig": 5}, r"\[rig\]: expected a table"),
+    ({"rig": {"load": {"bias_force_n": math.nan}}}, "load.bias_force_n must be finite"),
+    ({"rig": {"contraction_is_negative_x": "false"}}, "expected true or false"),
+    ({"seed": "abc"}, "seed: expected an integer"),
+    ({"seed": -1}, "seed: expected an integer"),
+    ({"seed": 1.7}, "seed: expected an integer"),
+    ({"seed": True}, "seed: expected an integer"),
+    ({"paper": 42}, "paper: expected text"),
+    ({"paper": "nosuch"}, "paper: 'nosuch' is not one of"),
+    ({"title": [1, 2]}, "title: expected text"),
+    ({"description": 5}, "description: expected text"),
+    ({"controllers": [{"label": 5, "mode": "PPC"}]}, r"label: expected text"),
+    ({"controllers": [{"label": "a", "mode": 2}]}, r"mode: expected text"),
+    ({"controllers": [{"label": "a", "mode": "PPC", "description": 1}]}, "description: expected text"),
+    ({"controllers": [{"label": "a", "mode": "PPC", "commission": "yes"}]}, "commission: expected true or false"),
+    ({"events": [{"t_s": 1, "action": "wire_break", "value": 5}]}, "expected 1 or 0 for wire_break"),
+    ({"events": [{"t_s": 1, "action": "sensor_block", "value": 0.5}]}, "expected 1 or 0 for sensor_block"),
+    ({"events": [{"t_s": 1, "action": "host_heartbeat", "value": True}]}, "expected 1 or 0 for host_heartbeat"),
+    ({"events": [{"t_s": 1, "action": "load_mass", "value": 0}]}, "load_mass must be > 0"),
+    ({"events": [{"t_s": 1, "action": 3, "value": 1}]}, "action: expected text"),
+    ({"events": [{"t_s": 1, "action": "disturbance"}]}, "missing 'value'"),
+    ({"expect": {"start_result": "BOGUS"}}, "start_result: 'BOGUS' is not one of"),
+    ({"expect": {"state": 3}}, "state: expected text"),
+    ({"rig": {"sensor": {"span_cm": 1e9}}}, "adc.offset_cm"),   # the wiring it gives is out of range
+])
+def test_a_mistyped_scenario_value_is_refused_with_the_key_named(change, message):
+    with pytest.raises(scn.ScenarioError, match=message):
+        scn.parse({**BASE, **change})
+
+
+def test_the_valid_values_of_the_typed_keys_still_load():
+    s = scn.parse({**BASE, "seed": 7, "paper": "table2", "title": "T",
+                   "events": [{"t_s": 1, "action": "wire_break", "value": 1},
+                              {"t_s": 2, "action": "wire_break", "value": 0.0},
+                              {"t_s": 3, "action": "load_mass", "value": 3}],
+                   "expect": {"state": "fault", "fault_code": "SENSOR_WIRE_BREAK", "start_result": "band"}})
+    assert s.seed == 7 and s.paper == "table2" and s.title == "T"
+    assert [e.value for e in s.events] == [1.0, 0.0, 3.0]
+    assert (s.expect.state, s.expect.start_result) == ("FAULT", "BAND")
+
+
+def test_every_shipped_scenario_file_loads_with_its_values_typed():
+    paths = sorted(p for p in scn.SCENARIO_DIR.rglob("*.toml") if not p.name.startswith("_"))
+    assert len(paths) > 30                                  # hil/scenarios, realistic/*, variants
+    for p in paths:
+        s = scn.load(str(p))
+        assert isinstance(s.seed, int) and isinstance(s.title, str)
+
+
+@pytest.mark.parametrize("text, message", [
+    (b'title = "caf\xe9"\n', "not UTF-8"),
+    (b'base = 5\n', "base: expected text"),
+    (b'base = "no_such_base.toml"\n', "base: no file"),
+    (b'seed = -1\n', "seed"),
+])
+def test_a_bad_scenario_file_exits_2_with_one_line(tmp_path, capsys, text, message):
+    f = tmp_path / "bad.toml"
+    f.write_bytes(text + b'duration_s = 1.0\n[[controllers]]\nlabel = "pid"\nmode = "PID"\n')
+    with pytest.raises(scn.ScenarioError, match=message):
+        scn.load(str(f))
+    assert main(["offline", str(f), "--brief"]) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+
+
+# ---------------------------------------------- run, bench, report: options checked up front --
+@pytest.mark.parametrize("argv, message", [
+    (["run", "case2b", "--controller", "ppc-paper", "--out", "f"], "--out: f exists and is not a directory"),
+    (["run", "case2b", "--controller", "ppc-paper", "--out", "x", "--bitrate", "-5"], "bit rate -5"),
+    (["run", "case2b", "--controller", "ppc-paper", "--out", "x", "--bitrate", "0"], "bit rate 0"),
+    (["run", "case2b", "--controller", "ppc-paper", "--out", "x", "--interface", "nosuch"], "socketcan"),
+    (["bench", "--seconds", "-1", "--out", "x"], "--seconds"),
+    (["bench", "--seconds", "nan", "--out", "x"], "--seconds"),
+    (["bench", "--seconds", "0", "--out", "x"], "--seconds"),
+    (["bench", "--out", "f"], "--out"),
+    (["bench", "--out", "x", "--bitrate", "0"], "bit rate 0"),
+    (["bench", "--out", "x", "--interface", "nosuch"], "nosuch"),
+])
+def test_run_and_bench_options_are_checked_before_anything_starts(argv, message, tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "f").write_text("a file")
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "x").exists() and (tmp_path / "f").read_text() == "a file"
+
+
+def test_a_bench_failure_is_one_line_and_a_nonzero_status(tmp_path, monkeypatch, capsys):
+    import hil.bench
+
+    def fail(cfg, seconds, out):
+        out.mkdir(parents=True, exist_ok=True)
+        raise RuntimeError("pma-fw-host did not answer:\nits output\nmore of it")
+    monkeypatch.setattr(hil.bench, "run_bench", fail)
+    rc = main(["bench", "--seconds", "0.1", "--out", str(tmp_path / "b"), "--interface", "virtual",
+               "--channel", "bench-test"])
+    assert rc == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "pma-fw-host did not answer" in err[0]
+    assert "its output" in (tmp_path / "b" / "bench-error.txt").read_text()
+
+
+@pytest.mark.parametrize("content, message", [
+    ("{bad", "not a readable JSON file"),
+    ("{}", "no 'scenario'"),
+    ("[]", "expected a JSON object"),
+    ('{"scenario": "s", "title": "t", "duration_s": 1, "period_s": 0.001, "windows": [], "rmste": {}, '
+     '"controllers": {"a": 5}, "state": {}, "fault_code": {}, "expect": {"state": "RUNNING", '
+     '"fault_code": "NONE", "start_result": "OK"}}', "controllers.a"),
+])
+def test_report_of_a_bad_summary_is_a_clear_error(tmp_path, capsys, content, message):
+    (tmp_path / "summary.json").write_text(content)
+    assert main(["report", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1
+
+
+def test_report_figures_need_the_runs_signals(tmp_path, capsys):
+    summary = {"scenario": "s", "title": "t", "duration_s": 1.0, "period_s": 0.001, "windows": [[0, 1]],
+               "rmste": {}, "controllers": {}, "state": {}, "fault_code": {},
+               "expect": {"state": "RUNNING", "fault_code": "NONE", "start_result": "OK"}}
+    import json
+    (tmp_path / "summary.json").write_text(json.dumps(summary))
+    assert main(["report", str(tmp_path)]) == 0                      # the summary alone reads
+    capsys.readouterr()
+    assert main(["report", str(tmp_path), "--figures"]) == 2
+    assert "signals.npz not found" in capsys.readouterr().err
+    (tmp_path / "signals.npz").write_bytes(b"not a zip")
+    assert main(["report", str(tmp_path), "--figures"]) == 2
+    assert "signals.npz" in capsys.readouterr().err

@@ -8,7 +8,7 @@ from typing import Any, Iterable
 import can
 
 from pmactl import adapters
-from pmactl.errors import InterfaceError
+from pmactl.errors import BadBusConfig, InterfaceError
 from pmactl.protocol import BASE_ID_MASK, BROADCASTS, Protocol
 
 DEFAULT_INTERFACE = "socketcan"
@@ -24,7 +24,12 @@ def bus_config(interface: str | None = None, channel: str | None = None,
     other files of can.util.load_config), and only what is still unset defaults:
     interface socketcan, and channel vcan0 when the interface is socketcan.
 
-    InterfaceError for an unknown interface name."""
+    BadBusConfig (an InterfaceError) for a value python-can cannot use, wherever it came
+    from: an interface name it does not have (neither built in nor an installed plug-in:
+    can.interfaces.VALID_INTERFACES), an empty one included, an empty channel, a bit rate that
+    is not a whole number of bit/s above 0; InterfaceError for a plug-in pmactl knows that is
+    not installed (with the pip command that installs it) and for another bad value. The one
+    check of both pmactl's and the HIL harness's bus options."""
     given: dict[str, Any] = {k: v for k, v in (("interface", interface), ("channel", channel),
                                                  ("bitrate", bitrate)) if v is not None}
     if "interface" not in given:
@@ -40,10 +45,17 @@ def bus_config(interface: str | None = None, channel: str | None = None,
         known = ", ".join(sorted(can.interfaces.VALID_INTERFACES))
         name = str(given.get("interface") or "")
         hint = adapters.unknown_interface_hint(name) if name else ""
-        raise InterfaceError(f"bad CAN configuration: {e} (python-can knows: {known})"
-                             + (f"\n  {hint}" if hint else "")) from e
+        if hint:    # a plug-in pmactl knows (docs/adapters.md), not installed: a missing driver
+            raise InterfaceError(f"bad CAN configuration: {e} (python-can knows: {known})\n  {hint}") from e
+        raise BadBusConfig(f"bad CAN configuration: {e} (python-can knows: {known})") from e
     except (ValueError, TypeError) as e:
         raise InterfaceError(f"bad CAN configuration: {e}") from e
+    channel = cfg.get("channel")
+    if channel is not None and not str(channel).strip():
+        raise BadBusConfig("bad CAN configuration: the channel is empty")
+    rate = cfg.get("bitrate")
+    if rate is not None and (isinstance(rate, bool) or not isinstance(rate, int) or rate <= 0):
+        raise BadBusConfig(f"bad CAN configuration: bit rate {rate!r} is not a whole number of bit/s above 0")
     if cfg.get("channel") is None and cfg.get("interface") == DEFAULT_INTERFACE:
         cfg["channel"] = DEFAULT_CHANNEL
     return {k: v for k, v in cfg.items() if v is not None}

@@ -10,6 +10,7 @@ import importlib.metadata
 import json
 import logging
 import math
+import os
 import struct
 import sys
 import time
@@ -22,6 +23,9 @@ import cantools
 from pmactl import adapters, identity, paramfile
 from pmactl.client import (
     NODE_REPLIES,
+    TYPE_CODES,
+    TYPE_SIGNALS,
+    BadBusConfig,
     BusMonitor,
     CommandError,
     InterfaceError,
@@ -127,12 +131,43 @@ def _at_least(text: str, low: float, strict: bool, what: str) -> float:
     return v
 
 
-def _positive(text: str) -> float:
-    return _at_least(text, 0.0, True, "a positive number of seconds")
+def _positive_value(unit: str) -> Callable[[str], float]:
+    """argparse type: a finite number above 0, its error naming the unit ("cm", "seconds")."""
+    def parse(text: str) -> float:
+        return _at_least(text, 0.0, True, f"a positive number of {unit}")
+    parse.__name__ = f"positive number of {unit}"
+    return parse
 
 
-def _positive_value(text: str) -> float:
-    return _at_least(text, 0.0, True, "a positive number")
+_positive = _positive_value("seconds")
+_positive_cm = _positive_value("cm")
+
+
+def _text(what: str) -> Callable[[str], str]:
+    """argparse type: a string that is not empty (or blank); what names it in the error."""
+    def parse(text: str) -> str:
+        if not text.strip():
+            raise argparse.ArgumentTypeError(f"the {what} is empty")
+        return text
+    parse.__name__ = what
+    return parse
+
+
+_file_name = _text("file name")
+
+# the largest --dpi of plot and scope: 1200 dots per inch is print quality; plot's figure of
+# every panel (7 x 11 in) is then 8400 x 13200 pixels (about 440 MB while it is drawn)
+DPI_MAX = 1200
+
+
+def _dpi(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number of dots per inch") from None
+    if not 1 <= v <= DPI_MAX:
+        raise argparse.ArgumentTypeError(f"{v} dots per inch is outside 1..{DPI_MAX}")
+    return v
 
 
 def _nonnegative(text: str) -> float:
@@ -224,9 +259,9 @@ def build_parser() -> argparse.ArgumentParser:
     padd("restore-defaults", "set every parameter to its default in RAM (save to keep them)")
     padd("revert", "replace the parameters in RAM by the set saved in storage (LOAD)")
     q = padd("dump", "write every parameter to a file (JSON; YAML with PyYAML; '-': stdout)")
-    q.add_argument("file", metavar="FILE")
+    q.add_argument("file", metavar="FILE", type=_file_name)
     q = padd("load", "set the parameters of a file; every entry is checked before any is sent")
-    q.add_argument("file", metavar="FILE")
+    q.add_argument("file", metavar="FILE", type=_file_name)
     q.add_argument("--dry-run", action="store_true", help="check the file and show what would change")
     q.add_argument("--send-all", action="store_true",
                    help="send every entry, also those the node already has")
@@ -262,11 +297,12 @@ def build_parser() -> argparse.ArgumentParser:
                    help="send even when the node would drop it (not RUNNING STREAM, outside the band)")
 
     p = add("record", "record telemetry (TELEM_A..E) to CSV, every frame to a .blf/.asc log")
-    p.add_argument("csv", metavar="CSV", help="output file (one row per telemetry tick, units in the header)")
+    p.add_argument("csv", metavar="CSV", type=_file_name,
+                   help="output file (one row per telemetry tick, units in the header)")
     p.add_argument("--seconds", type=_positive, default=10.0, help="how long to record (default 10 s)")
     p.add_argument("--samples", type=_count, help="stop after this many rows")
-    p.add_argument("--log", metavar="FILE", help="python-can log of every frame: .blf, .asc or .log "
-                                                 "(default: the CSV's name with .blf)")
+    p.add_argument("--log", metavar="FILE", type=_file_name,
+                   help="python-can log of every frame: .blf, .asc or .log (default: the CSV's name with .blf)")
     p.add_argument("--no-log", action="store_true", help="no frame log")
     p.add_argument("--start", action="store_true",
                    help="send START when the recording begins (node ARMED) and STOP at its end")
@@ -281,35 +317,39 @@ def build_parser() -> argparse.ArgumentParser:
                           "(docs/commissioning.md): wiring check, static map, step responses, rules; the node "
                           "must be IDLE with its sensor and DAC scalings set. Without --apply nothing changes "
                           "on the node")
-    p.add_argument("--w1", type=_positive_value, required=True, metavar="CM", help="the task's accuracy w1 [cm]")
-    p.add_argument("--t-u", type=_positive_value, required=True, metavar="S", help="the task's tuning time t_u [s]")
+    p.add_argument("--w1", type=_positive_cm, required=True, metavar="CM",
+                   help="the task's accuracy w1 [cm] (within ppc.w1_cm's range)")
+    p.add_argument("--t-u", type=_positive, required=True, metavar="S",
+                   help="the task's tuning time t_u [s] (within ppc.t_u_s's range)")
     p.add_argument("--x-min", type=_finite, metavar="CM",
                    help="the lower output constraint [cm] (default: the node's safety.x_min_cm)")
     p.add_argument("--x-max", type=_finite, metavar="CM",
                    help="the upper output constraint [cm] (default: the node's safety.x_max_cm)")
     p.add_argument("--x-start", type=_finite, metavar="CM",
-                   help="where the task's reference starts [cm] (default: the band's middle)")
+                   help="where the task's reference starts [cm], within x-min + w1 .. x-max - w1 "
+                        "(default: the band's middle)")
     p.add_argument("--speed", type=_nonnegative, default=0.0, metavar="CM_S",
                    help="the reference's largest speed [cm/s] (default 0: set-points)")
-    p.add_argument("--out", metavar="DIR", help="write report.json, params.json (the params dump format) and "
-                                                "figures (static map, step responses, noise) into DIR")
+    p.add_argument("--out", metavar="DIR", type=_file_name,
+                   help="write report.json, params.json (the params dump format) and figures (static map, "
+                        "step responses, noise) into DIR")
     p.add_argument("--apply", action="store_true", help="SET the derived parameters on the node (RAM)")
     p.add_argument("--save", action="store_true", help="with --apply: also SAVE them (persist)")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress display")
 
     p = add("plot", "PNG figures of a recording, in the style of the paper's, and its numbers "
                     "(entry into the w1 band, max |e| and RMSTE after t_u, peak velocity and input)")
-    p.add_argument("csv", metavar="CSV")
-    p.add_argument("--out", metavar="PREFIX",
+    p.add_argument("csv", metavar="CSV", type=_file_name)
+    p.add_argument("--out", metavar="PREFIX", type=_file_name,
                    help="writes PREFIX.png and PREFIX_<panel>.png (default: the CSV without .csv)")
-    p.add_argument("--w1", type=_positive, metavar="CM", help="draw the accuracy band +-w1 on the error")
+    p.add_argument("--w1", type=_positive_cm, metavar="CM", help="draw the accuracy band +-w1 on the error")
     p.add_argument("--band", type=_finite, nargs=2, metavar=("LOW_CM", "HIGH_CM"),
-                   help="draw the constraints on the position")
+                   help="draw the constraints on the position (LOW_CM < HIGH_CM)")
     p.add_argument("--t-u", type=_positive, metavar="S", help="mark the tuning time t_u")
     p.add_argument("--title")
     p.add_argument("--no-meta", action="store_true",
                    help="ignore the recording's .meta.json (by default w1, t_u and the band come from it)")
-    p.add_argument("--dpi", type=_count, default=150, help="resolution (default 150)")
+    p.add_argument("--dpi", type=_dpi, default=150, help=f"resolution (default 150, at most {DPI_MAX})")
     p.add_argument("--no-panels", action="store_true",
                    help="only PREFIX.png (all panels), not one PNG per panel")
 
@@ -319,12 +359,13 @@ def build_parser() -> argparse.ArgumentParser:
                    help="the nodes to show: 1,2,5 or 0-3 (default: --node)")
     p.add_argument("--window", type=_positive, default=10.0, metavar="S",
                    help="rolling window in s (default 10)")
-    p.add_argument("--fps", type=_positive, default=30.0, help="redraws per second (default 30)")
-    p.add_argument("--w1", type=_positive, metavar="CM",
+    p.add_argument("--fps", type=_positive_value("frames per second"), default=30.0,
+                   help="redraws per second (default 30)")
+    p.add_argument("--w1", type=_positive_cm, metavar="CM",
                    help="the +-w1 band on e (default: each PPC node's ppc.w1_cm)")
     p.add_argument("--host-heartbeat", action="store_true",
                    help="send HOST_HEARTBEAT to the nodes (keeps them RUNNING without record/monitor)")
-    p.add_argument("--csv", metavar="CSV",
+    p.add_argument("--csv", metavar="CSV", type=_file_name,
                    help="recording file (several nodes: CSV's stem + _n<node>); default "
                         "scope-<date>-<time>.csv when r is pressed")
     p.add_argument("--record", action="store_true", help="record from the start")
@@ -332,15 +373,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--frames", type=_count, help="stop after this many frames drawn")
     p.add_argument("--headless", action="store_true",
                    help="no window: render with Agg and write each frame as PNG (--out, --frames)")
-    p.add_argument("--out", metavar="PREFIX", default="scope",
+    p.add_argument("--out", metavar="PREFIX", default="scope", type=_file_name,
                    help="headless: writes PREFIX_0001.png, ... (default scope)")
-    p.add_argument("--dpi", type=_count, default=80, help="resolution (default 80)")
+    p.add_argument("--dpi", type=_dpi, default=80, help=f"resolution (default 80, at most {DPI_MAX})")
 
     p = add("dbc", "write a DBC of the protocol for every node given: each node's messages at "
                    "their frame ids (NAME_N<node>), for cantools, SavvyCAN and other viewers")
     p.add_argument("--nodes", type=_node_list, default=list(range(16)), metavar="LIST",
                    help="node ids: 0-15 (the default), 1,2,5 or 0-3,8")
-    p.add_argument("-o", "--output", metavar="FILE", default="-",
+    p.add_argument("-o", "--output", metavar="FILE", default="-", type=_file_name,
                    help="the DBC file to write (default '-': stdout)")
 
     p = add("monitor", "heartbeats and faults of every node, live, until Ctrl-C")
@@ -439,6 +480,41 @@ def _table(rows: list[list[str]], right: set[int]) -> list[str]:
         cells = [c.rjust(w) if i in right else c.ljust(w) for i, (c, w) in enumerate(zip(r, widths))]
         lines.append("  ".join(cells).rstrip())
     return lines
+
+
+def _check_output(path: Path, what: str, create_dir: bool = False) -> None:
+    """An output file that can be written: a file name (not a directory, not '.'), in a
+    directory that exists (create_dir: or that will be made) and is writable. UsageError
+    (exit 2, nothing sent) otherwise: every output is checked before the bus is touched."""
+    label = f"{what} {path}" if what else str(path)
+    if path.name in ("", ".", "..") or path.is_dir():
+        raise UsageError(f"{label}: is a directory (give a file name)")
+    parent = path.parent
+    if not parent.exists() and not create_dir:
+        raise UsageError(f"{label}: directory {parent} does not exist")
+    while not parent.exists():       # create_dir: the directory made is in the first that exists
+        parent = parent.parent
+    if not parent.is_dir():
+        raise UsageError(f"{label}: {parent} is not a directory")
+    if not os.access(parent, os.W_OK | os.X_OK) or (path.exists() and not os.access(path, os.W_OK)):
+        raise UsageError(f"{label}: not writable")
+
+
+def _check_outputs(outputs: Sequence[tuple[str, Path | None]], inputs: Sequence[tuple[str, Path]] = (),
+                   create_dir: bool = False) -> None:
+    """Each output checked (_check_output), and no two of the files, outputs and inputs,
+    the same file (one would overwrite the other)."""
+    seen: dict[Path, str] = {}
+    for what, path in inputs:
+        seen[path.resolve()] = f"{what} {path}"
+    for what, out in outputs:
+        if out is None:
+            continue
+        _check_output(out, what, create_dir)
+        key = out.resolve()
+        if key in seen:
+            raise UsageError(f"{what} {out} is the same file as {seen[key]}: give them different names")
+        seen[key] = f"{what} {out}"
 
 
 def _status_lines(st: Status, bus_text: str) -> list[str]:
@@ -591,6 +667,10 @@ def cmd_params_set(s: Session) -> int:
     p = s.param(s.args.name)
     try:
         value = p.parse(s.args.value) if s.args.no_check else p.check(s.args.value)
+        # --no-check leaves the table's range to the node, but the frame's value signal
+        # (PARAM_REQ ValueF32/U32/I32) has its own: out of it, nothing can be sent
+        s.proto.check_signal("PARAM_REQ", TYPE_SIGNALS[TYPE_CODES[p.type]], value,
+                             what=f"{p.name} ({p.type})", finite=False)
     except ValueError as e:
         raise UsageError(str(e)) from None
     node = s.node
@@ -621,6 +701,8 @@ def cmd_params_simple(s: Session) -> int:
 def cmd_params_dump(s: Session) -> int:
     path = s.args.file.replace("{node}", str(s.node_id))
     paramfile._kind(path)            # a bad file name fails before the bus is touched
+    if path != "-":                  # and so does a file that cannot be written
+        _check_output(Path(path), "params dump")
     node = s.node
     values = node.values()
     try:
@@ -661,6 +743,11 @@ def cmd_params_load(s: Session) -> int:
     plan = paramfile.plan(s.args.file, paramfile.read(s.args.file), s.proto,
                           with_node_id=s.args.with_node_id)
     entries = plan.entries
+    if not entries:                  # nothing to send: a bad file, not a success without a node
+        why = ["no parameter to load (\"params\" lists none)"] if not plan.dropped and not plan.node_id_skipped \
+            else ["no parameter to load: every entry was left out"] + [f"dropped {d}" for d in plan.dropped] \
+            + ([f"{paramfile.NODE_ID_PARAM} is loaded only with --with-node-id"] if plan.node_id_skipped else [])
+        raise paramfile.ParamFileError(s.args.file, why)
     node = s.node
     _plan_lines(s, plan)
     if s.args.dry_run:
@@ -803,8 +890,12 @@ def cmd_select(s: Session) -> int:
 
 
 def cmd_setpoint(s: Session) -> int:
-    node = s.node
     x = float(s.args.x_cm)
+    try:                             # what SETPOINT can carry (the DBC's range), --no-check or not
+        s.proto.check_signal("SETPOINT", "XrCm", x, what="set-point")
+    except ValueError as e:
+        raise UsageError(str(e)) from None
+    node = s.node
     if not s.args.no_check:
         st = node.status()
         if st.state_name != "RUNNING" or st.reference_name != "STREAM":
@@ -849,15 +940,15 @@ def _progress_printer(quiet: bool) -> Callable[[RecordProgress], None] | None:
 
 def cmd_record(s: Session) -> int:
     csv_path = Path(s.args.csv)
+    _check_output(csv_path, "")      # before deriving the other names from it
     log = None
     if not s.args.no_log:
-        log = Path(s.args.log) if s.args.log else csv_path.with_suffix(".blf")
+        log = Path(s.args.log) if s.args.log is not None else csv_path.with_suffix(".blf")
         if log.suffix.lower() not in (".blf", ".asc", ".log"):
             raise UsageError(f"--log {log}: use a .blf, .asc or .log file")
     meta = csv_path.with_name(csv_path.stem + ".meta.json")
-    for path in (csv_path, log):
-        if path is not None and not path.parent.exists():
-            raise UsageError(f"{path}: directory {path.parent} does not exist")
+    _check_outputs([("CSV", csv_path), ("--log" if s.args.log is not None else "frame log", log),
+                    ("metadata", meta)])
     node = s.node
     rec = TelemetryRecorder(node, csv_path, log, meta, host_heartbeat=not s.args.no_host_heartbeat,
                             all_frames=s.args.all_frames)
@@ -887,9 +978,68 @@ def cmd_record(s: Session) -> int:
     return EXIT_OK
 
 
+def _meta_options(meta_path: Path, w1: float | None, t_u: float | None, band: Any,
+                  title: str | None) -> tuple[float | None, float | None, Any, str | None]:
+    """w1, t_u, band and title, those the command line left open taken from a recording's
+    .meta.json (w1 and t_u of a PPC run, the band safety.x_min_cm..x_max_cm). A value plot
+    would take that is not a finite number (w1, t_u: positive; the band: low < high) makes
+    the file a bad one, ParamFileError listing each (exit 5): --no-meta, or the option, sets
+    the value instead."""
+    def bad(problems: list[str]) -> paramfile.ParamFileError:
+        return paramfile.ParamFileError(str(meta_path), problems + [
+            "(--no-meta ignores the file; --w1, --t-u, --band give the values instead)"])
+    try:
+        meta = json.loads(meta_path.read_text())
+    except (OSError, UnicodeDecodeError, ValueError) as e:
+        raise bad([f"not a recording's metadata: {getattr(e, 'strerror', None) or e}"]) from None
+    if not isinstance(meta, dict) or not isinstance(meta.get("params", {}), dict):
+        raise bad(["not a recording's metadata: not a JSON object with a \"params\" object"])
+    params: dict[str, Any] = meta.get("params", {})
+    problems: list[str] = []
+
+    def number(key: str, positive: bool, unit: str) -> float | None:
+        v = params[key]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) \
+                or (positive and v <= 0):
+            problems.append(f"params.{key} = {json.dumps(v)} is not a {'positive ' if positive else ''}"
+                            f"finite number ({unit})")
+            return None
+        return float(v)
+
+    if meta.get("controller") == "PPC":
+        if w1 is None and "ppc.w1_cm" in params:
+            w1 = number("ppc.w1_cm", True, "cm")
+        if t_u is None and "ppc.t_u_s" in params:
+            t_u = number("ppc.t_u_s", True, "s")
+    if band is None and "safety.x_min_cm" in params and "safety.x_max_cm" in params:
+        lo, hi = number("safety.x_min_cm", False, "cm"), number("safety.x_max_cm", False, "cm")
+        if lo is not None and hi is not None:
+            if lo < hi:
+                band = (lo, hi)
+            else:
+                problems.append(f"params.safety.x_min_cm = {lo:g} cm is not below "
+                                f"params.safety.x_max_cm = {hi:g} cm")
+    if problems:
+        raise bad(problems)
+    if title is None:
+        title = (f"node {meta.get('node')}, {meta.get('controller')}, "
+                 f"reference {params.get('ref.kind', '?')}")
+    return w1, t_u, band, title
+
+
 def cmd_plot(s: Session) -> int:
-    from pmactl.plot import PlotOptions, plot_recording
+    from pmactl.plot import PlotOptions, output_paths, plot_recording
     csv_path = Path(s.args.csv)
+    if s.args.band and not s.args.band[0] < s.args.band[1]:
+        raise UsageError(f"--band {s.args.band[0]:g} {s.args.band[1]:g}: LOW_CM must be below HIGH_CM")
+    if csv_path.name in ("", ".", "..") or csv_path.is_dir():
+        raise paramfile.ParamFileError(str(csv_path), ["cannot read: is a directory"])
+    prefix = Path(s.args.out) if s.args.out else csv_path.with_suffix("")
+    if prefix.name in ("", ".", "..") or (s.args.out is not None and prefix.is_dir()):
+        raise UsageError(f"--out {s.args.out}: is a directory; give a file name prefix "
+                         f"(e.g. {prefix / csv_path.with_suffix('').name})")
+    _check_outputs([("figure", path) for path in output_paths(prefix, not s.args.no_panels)],
+                   inputs=[("the recording", csv_path)], create_dir=True)
     try:
         rec = read_recording(csv_path)
     except RecordingError as e:
@@ -899,20 +1049,7 @@ def cmd_plot(s: Session) -> int:
     w1, band, t_u, title = s.args.w1, tuple(s.args.band) if s.args.band else None, s.args.t_u, s.args.title
     meta_path = csv_path.with_name(csv_path.stem + ".meta.json")
     if not s.args.no_meta and meta_path.exists():
-        try:
-            meta = json.loads(meta_path.read_text())
-            params = meta.get("params", {})
-            if meta.get("controller") == "PPC":
-                w1 = w1 if w1 is not None else params.get("ppc.w1_cm")
-                t_u = t_u if t_u is not None else params.get("ppc.t_u_s")
-            if band is None and "safety.x_min_cm" in params and "safety.x_max_cm" in params:
-                band = (params["safety.x_min_cm"], params["safety.x_max_cm"])
-            if title is None:
-                title = (f"node {meta.get('node')}, {meta.get('controller')}, "
-                         f"reference {params.get('ref.kind', '?')}")
-        except (OSError, ValueError, AttributeError) as e:
-            raise paramfile.ParamFileError(str(meta_path), [f"not a recording's metadata: {e}"]) from None
-    prefix = Path(s.args.out) if s.args.out else csv_path.with_suffix("")
+        w1, t_u, band, title = _meta_options(meta_path, w1, t_u, band, title)
     written = plot_recording(rec, prefix, PlotOptions(w1_cm=w1, band_cm=band, t_u_s=t_u,
                                                       title=title, dpi=s.args.dpi,
                                                       panels=not s.args.no_panels))
@@ -931,8 +1068,7 @@ def cmd_dbc(s: Session) -> int:
         sys.stdout.flush()
         return EXIT_OK
     path = Path(s.args.output)
-    if not path.parent.exists():
-        raise UsageError(f"{path}: directory {path.parent} does not exist")
+    _check_output(path, "")
     try:
         write_node_dbc(path, nodes, s.proto)
     except OSError as e:
@@ -949,11 +1085,18 @@ def cmd_scope(s: Session) -> int:
     nodes: list[int] = a.nodes or list(a.node)
     if a.headless and a.frames is None and a.seconds is None:
         raise UsageError("--headless needs --frames N or --seconds S (it writes a PNG per frame)")
-    csv_path = Path(a.csv) if a.csv else None
+    csv_path = Path(a.csv) if a.csv is not None else None
     out = Path(a.out)
-    for path in (csv_path, out if a.headless else None):
-        if path is not None and not path.parent.exists():
-            raise UsageError(f"{path}: directory {path.parent} does not exist")
+    if csv_path is not None:
+        _check_output(csv_path, "--csv")       # and each node's file, as the scope names them
+        csvs = [csv_path] if len(nodes) == 1 else \
+            [csv_path.with_name(f"{csv_path.stem}_n{n}{csv_path.suffix or '.csv'}") for n in nodes]
+        _check_outputs([("--csv", path) for path in csvs]
+                       + [("metadata", path.with_name(path.stem + ".meta.json")) for path in csvs])
+    if a.headless:
+        if out.name in ("", ".", "..") or out.is_dir():
+            raise UsageError(f"--out {a.out}: is a directory; give a file name prefix (e.g. {out / 'scope'})")
+        _check_output(out.with_name(f"{out.name}_0001.png"), "--out")
     opts = ScopeOptions(nodes=nodes, window_s=a.window, fps=a.fps, w1_cm=a.w1,
                         host_heartbeat=a.host_heartbeat, csv=csv_path, record=a.record,
                         seconds=a.seconds, frames=a.frames, headless=a.headless, png_prefix=out,
@@ -1017,22 +1160,46 @@ COMMANDS: dict[str, Callable[[Session], int]] = {
 SINGLE_NODE = ("scan", "record", "plot", "monitor", "node-id", "commission")
 
 
+def _check_band(x_min: float, x_max: float, w1: float, x_start: float | None, source: str) -> None:
+    """The task's band (docs/commissioning.md): x_min < x_max, wider than 2 w1 (eq. 14), and
+    x_start within it less w1 (x_min + w1 .. x_max - w1), where the reference can run."""
+    if not x_min < x_max:
+        raise UsageError(f"--x-min {x_min:g} cm must be below --x-max {x_max:g} cm{source}")
+    if x_max - x_min <= 2 * w1:
+        raise UsageError(f"the band {x_min:g}..{x_max:g} cm{source} is not wider than 2 w1 = {2 * w1:g} cm "
+                         f"(eq. 14)")
+    if x_start is not None and not x_min + w1 <= x_start <= x_max - w1:
+        raise UsageError(f"--x-start {x_start:g} cm is outside {x_min + w1:g}..{x_max - w1:g} cm: the band "
+                         f"{x_min:g}..{x_max:g} cm{source} less w1 = {w1:g} cm")
+
+
 def cmd_commission(s: Session) -> int:
     from . import commission, commission_report
     from .commission_rules import CommissionError, Task
     args = s.args
     if args.save and not args.apply:
         raise UsageError("--save needs --apply (nothing is set without it)")
-    out_dir = Path(args.out) if args.out else None
+    out_dir = Path(args.out) if args.out is not None else None
     if out_dir is not None and out_dir.exists() and not out_dir.is_dir():
         raise UsageError(f"--out {args.out}: not a directory")
+    # the task, against the parameter table's ranges of the parameters it becomes (the node
+    # would refuse them after the whole measurement), before anything is sent
+    for option, pname, value in (("--w1", "ppc.w1_cm", args.w1), ("--t-u", "ppc.t_u_s", args.t_u),
+                                 ("--x-min", "safety.x_min_cm", args.x_min),
+                                 ("--x-max", "safety.x_max_cm", args.x_max)):
+        if value is not None:
+            try:
+                s.proto.param(pname).check(value)
+            except ValueError as e:
+                raise UsageError(f"{option}: {e}") from None
+    if args.x_min is not None and args.x_max is not None:
+        _check_band(args.x_min, args.x_max, args.w1, args.x_start, "")
     node = s.node
     x_min = args.x_min if args.x_min is not None else float(node.get("safety.x_min_cm"))
     x_max = args.x_max if args.x_max is not None else float(node.get("safety.x_max_cm"))
-    if not x_min < x_max:
-        raise UsageError(f"--x-min {x_min:g} must be below --x-max {x_max:g}")
-    if x_max - x_min <= 2 * args.w1:
-        raise UsageError(f"the band {x_min:g}..{x_max:g} cm is not wider than 2 w1 = {2 * args.w1:g} cm (eq. 14)")
+    _check_band(x_min, x_max, args.w1, args.x_start,
+                "" if args.x_min is not None and args.x_max is not None
+                else f" (node {node.node}'s safety.x_min_cm..x_max_cm where not given)")
     task = Task(w1_cm=args.w1, t_u_s=args.t_u, x_min_cm=x_min, x_max_cm=x_max, x_start_cm=args.x_start,
                 speed_cm_s=args.speed)
     bar = commission_report.ProgressBar(sys.stderr) if not args.quiet and sys.stderr.isatty() else None
@@ -1084,7 +1251,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     s = Session(args, out)
     try:
         nodes = _nodes_of(s)
-    except UsageError as e:
+    except (UsageError, BadBusConfig) as e:
         _err(f"error: {e}")
         s.close()
         return EXIT_USAGE
@@ -1146,7 +1313,7 @@ def _run_one(s: Session) -> int:
     args = s.args
     try:
         return COMMANDS[args.command](s)
-    except UsageError as e:
+    except (UsageError, BadBusConfig) as e:
         _err(f"error: {e}")
         return EXIT_USAGE
     except paramfile.ParamFileError as e:

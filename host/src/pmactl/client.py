@@ -30,6 +30,7 @@ from pmactl.bus import (
     open_bus,
 )
 from pmactl.errors import (
+    BadBusConfig,
     CommandError,
     InterfaceError,
     NodeStateError,
@@ -68,6 +69,7 @@ from pmactl.recorder import (
 )
 
 __all__ = [
+    "BadBusConfig",
     "Ack",
     "BusMonitor",
     "CommandError",

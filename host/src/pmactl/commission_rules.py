@@ -438,6 +438,9 @@ def derive(m: Measured, task: Task) -> Derivation:
     polarity = 1 if m.polarity_measured > 0 else -1
     x_mid = 0.5 * (reach_lo + reach_hi)
     x_start = x_mid if task.x_start_cm is None else min(max(task.x_start_cm, reach_lo), reach_hi)
+    if task.x_start_cm is not None and x_start != task.x_start_cm:
+        warnings.append(f"x_start = {task.x_start_cm:g} cm is outside {reach_lo:.3f}..{reach_hi:.3f} cm (the band less "
+                        f"w1 within the measured stroke): the start's holding input is taken at {x_start:.3f} cm")
     p0 = m.static_map.hold_kpa(x_mid)
 
     # the plant as the controller sees it: u in its unit, dx/du > 0 with the derived polarity. The

@@ -40,6 +40,13 @@ class InterfaceError(Exception):
     """The CAN interface could not be opened (or failed)."""
 
 
+class BadBusConfig(InterfaceError):
+    """The bus configuration holds a value python-can cannot use: an interface it does not
+    have, an empty channel, a bit rate that is not a whole number of bit/s above 0. A bad
+    value, not a failing adapter: pmactl and the HIL harness exit 2 for it, 3 for an
+    interface that fails to open."""
+
+
 class NodeStateError(Exception):
     """The node is not in a state (or configuration) that allows the request."""
 

@@ -4,7 +4,6 @@ replies.
 """
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass, field
 from typing import Any, Callable, Iterable
@@ -444,8 +443,9 @@ class PmaNode:
         self.send("HOST_HEARTBEAT", {"Counter": counter & 0xFF})
 
     def setpoint(self, xr_cm: float) -> None:
-        if not math.isfinite(xr_cm):
-            raise ValueError("set-point must be finite")
+        """Sends a SETPOINT; ValueError (nothing sent) for a value the frame cannot carry
+        (not finite, or outside the DBC's range of XrCm)."""
+        self.proto.check_signal("SETPOINT", "XrCm", xr_cm, what="set-point")
         self.send("SETPOINT", {"XrCm": xr_cm})
 
     # ------------------------------------------------------ plant bridge --

@@ -64,6 +64,13 @@ def _draw(a: "Axes", key: str, rec: Recording, opt: PlotOptions) -> None:
     a.legend(loc="best", fontsize=8, frameon=False)
 
 
+def output_paths(prefix: str | Path, panels: bool = True) -> list[Path]:
+    """The files plot_recording writes: <prefix>.png and, with panels, one per panel."""
+    prefix = Path(prefix)
+    return [prefix.with_name(prefix.name + ".png")] + [
+        prefix.with_name(f"{prefix.name}_{letter}_{name}.png") for letter, name, _ in PANELS if panels]
+
+
 def plot_recording(rec: Recording, prefix: str | Path, opt: PlotOptions = PlotOptions()) -> list[Path]:
     """Writes <prefix>.png (all panels) and, with opt.panels, <prefix>_<letter>_<name>.png
     (one each); returns the paths."""
@@ -88,12 +95,13 @@ def plot_recording(rec: Recording, prefix: str | Path, opt: PlotOptions = PlotOp
     if opt.title:
         fig.suptitle(opt.title, fontsize=10)
     fig.tight_layout()
-    out = prefix.with_name(prefix.name + ".png")
+    paths = output_paths(prefix, opt.panels)
+    out = paths[0]
     fig.savefig(out, dpi=opt.dpi)
     plt.close(fig)
     written.append(out)
 
-    for letter, name, _ in PANELS if opt.panels else ():
+    for (letter, name, _), out in zip(PANELS, paths[1:]):
         fig, ax = plt.subplots(figsize=(6.0, 3.0))
         _draw(ax, name, rec, opt)
         ax.set_xlabel("Time (s)")
@@ -101,7 +109,6 @@ def plot_recording(rec: Recording, prefix: str | Path, opt: PlotOptions = PlotOp
         ax.set_xlim(*xlim)
         ax.set_title(f"({letter})" + (f" {opt.title}" if opt.title else ""), loc="left", fontsize=9)
         fig.tight_layout()
-        out = prefix.with_name(f"{prefix.name}_{letter}_{name}.png")
         fig.savefig(out, dpi=opt.dpi)
         plt.close(fig)
         written.append(out)

@@ -251,6 +251,33 @@ class Protocol:
             return b""
         return bytes(m.encode(data or {}, scaling=False, strict=True))
 
+    def signal_range(self, message: str, signal: str) -> tuple[float | None, float | None, str]:
+        """(minimum, maximum, unit) of a signal as the DBC gives them (None: no limit)."""
+        sig = self.messages[message].get_signal_by_name(signal)
+        return sig.minimum, sig.maximum, sig.unit or ""
+
+    def check_signal(self, message: str, signal: str, value: float | int, what: str | None = None,
+                     finite: bool = True) -> float | int:
+        """value, when the signal can carry it: a number (finite unless finite=False, which
+        lets a NaN through as cantools does) within the DBC's range for the signal, what
+        cantools would refuse to encode. ValueError naming `what` (default MESSAGE.Signal), the
+        value, the range and the unit otherwise: check before sending, nothing is sent."""
+        name = what or f"{message}.{signal}"
+        lo, hi, unit = self.signal_range(message, signal)
+        u = f" {unit}" if unit else ""
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ValueError(f"{name}: {value!r} is not a number")
+        if finite and not math.isfinite(value):
+            raise ValueError(f"{name}: {value} is not finite")
+        if (lo is not None and value < lo) or (hi is not None and value > hi):
+            def num(x: float | int | None) -> str:
+                if x is None:
+                    return ""
+                return str(int(x)) if float(x).is_integer() and abs(x) < 1e16 else f"{x:g}"
+            raise ValueError(f"{name}: {num(value)}{u} is outside {num(lo)}..{num(hi)}{u} (the range "
+                             f"{message} carries; nothing sent)")
+        return value
+
     def encode_raw(self, message: str, data: Mapping[str, int | float]) -> bytes:
         """`encode` without cantools where the message has a compiled layout (the HIL loop's
         frames): raw values, each within its signal's bits (ValueError otherwise)."""

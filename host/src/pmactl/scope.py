@@ -256,9 +256,16 @@ class Scope:
         for tr in self.traces.values():
             if tr.file is not None:
                 tr.file.close()
-                self.out(f"recorded {tr.recorded} rows of node {tr.node} to {tr.path}")
-                if tr.path is not None:
-                    self._write_meta(tr, tr.path)
+                if tr.recorded == 0 and tr.path is not None:
+                    # no telemetry came: no header-only file (and no metadata) left behind
+                    tr.path.unlink(missing_ok=True)
+                    if str(tr.path) in self.files:
+                        self.files.remove(str(tr.path))
+                    self.out(f"no rows of node {tr.node} recorded: {tr.path} not kept")
+                else:
+                    self.out(f"recorded {tr.recorded} rows of node {tr.node} to {tr.path}")
+                    if tr.path is not None:
+                        self._write_meta(tr, tr.path)
             tr.file = tr.writer = None
             tr.recorded = 0
         self._recording = False
