@@ -33,6 +33,8 @@ from typing import Any
 
 import numpy as np
 
+from hil import acceptance
+
 ROOT = Path(__file__).resolve().parent.parent
 LEVEL = 1.001   # worst PPC / MFAC RMSTE still counted level: within 0.1 % (docs/hil.md, the variant test)
 TASKS = ("case1", "case2a", "case2b", "case3", "constraint_approach", "load_change")
@@ -272,7 +274,35 @@ def main() -> int:
         print(line)
     print(f"\n{ahead} of {len(jobs)} runs with the paper's controller ahead of MFAC or level (0.1 %) in every window"
           f" (summaries: {out})")
+    print_acceptance(jobs, summaries)
     return 0
+
+
+def acceptance_failures(jobs: list[tuple[str, str, list[str]]], summaries: list[dict[str, Any]]) -> list[list[str]]:
+    """Each run's failed acceptance criteria (hil/acceptance.py); a Case 2b run also carries
+    the band-entry check against its rig's Case 2a."""
+    failures, feasible = [], []
+    for (_, task, _), s in zip(jobs, summaries):
+        feasible.append(acceptance.summary_feasible(s))
+        failures.append(acceptance.run_failures(s, task.split()[0], feasible[-1]))
+    by_rig: dict[str, dict[str, int]] = {}
+    for i, (label, task, _) in enumerate(jobs):
+        by_rig.setdefault(label, {})[task] = i
+    for tasks in by_rig.values():
+        if "case2a" in tasks and "case2b" in tasks:
+            a, b = tasks["case2a"], tasks["case2b"]
+            failures[b] += acceptance.band_entry_failures(summaries[a], summaries[b], feasible[a] and feasible[b])
+    return failures
+
+
+def print_acceptance(jobs: list[tuple[str, str, list[str]]], summaries: list[dict[str, Any]]) -> None:
+    failures = acceptance_failures(jobs, summaries)
+    met = sum(not f for f in failures)
+    print(f"{met} of {len(jobs)} runs meet every acceptance criterion (hil/acceptance.py)"
+          + ("; the others:" if met < len(jobs) else ""))
+    for (label, task, _), f in zip(jobs, failures):
+        if f:
+            print(f"- {label.split(':')[0]} {task}: " + "; ".join(f))
 
 
 if __name__ == "__main__":

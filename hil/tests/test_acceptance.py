@@ -27,11 +27,10 @@ from typing import Any
 import numpy as np
 import pytest
 
-from hil import offline
+from hil import acceptance, offline
 from hil import scenario as scn
 from hil.commissioned import commission_offline
 
-CHATTER_MAX = 3.0   # pressure command's total variation at most 3x what the reference needs
 JOBS = 2            # worker processes per scenario (the machines have 2 cores)
 # The rigs every claim is asserted on: the realistic profile fitted to a measured DMSP-10-250
 # (creep, its slow flow-limited valve, smooth hysteresis: docs/rig.md) first, the default; the
@@ -102,8 +101,7 @@ def test_paper_controller_has_no_barrier_breach_after_tu(runs, case):
 
 @pytest.mark.parametrize("case", ["case1", "case2a", "case2b", "case3"])
 def test_paper_controller_does_not_chatter(runs, case):
-    c = runs(case)[0]["controllers"]["ppc"]
-    assert c["chatter_ratio"] is not None and c["chatter_ratio"] < CHATTER_MAX, c["chatter_ratio"]
+    assert not acceptance.chatter_failures(runs(case)[0], case)
 
 
 @pytest.mark.parametrize("case", ["case1", "case2a", "case2b", "case3"])
@@ -120,12 +118,13 @@ def test_the_paper_law_exactly_is_reported(runs, case):
 
 
 def test_case3_paper_controller_beats_mfac_once_the_chirp_speeds_up(runs):
-    """Windows 60-180 s, by a wide margin (at least 2x)."""
+    """Windows 60-180 s, by a wide margin (at least 2x), with the guarantee held; and MFAC's
+    error growing with the chirp (hil/acceptance.py)."""
     s, _ = runs("case3")
-    ppc, mfac = s["rmste"]["ppc"], s["rmste"]["mfac"]
-    assert len(ppc) == 6
-    for w, a, b in list(zip(s["windows"], ppc, mfac))[2:]:
-        assert 2.0 * a < b, f"window {w}: PPC {a:.4f} cm vs MFAC {b:.4f} cm"
+    assert len(s["rmste"]["ppc"]) == 6 and s["windows"][2][0] == acceptance.CASE3_FROM_S
+    assert s["controllers"]["ppc"]["guarantee_lost_at_s"] is None
+    assert not acceptance.case3_failures(s)
+    assert all(measurable for *_, measurable in acceptance.case3_factor_windows(s))   # every window, here
 
 
 # In 5-30 s and 30-60 s both controllers are near the sensor's quantisation floor (a perfect loop
@@ -139,13 +138,6 @@ def test_case3_paper_controller_beats_mfac_in_every_window(runs):
         assert a < b, f"window {w}: PPC {a:.6f} cm vs MFAC {b:.6f} cm"
 
 
-def test_case3_mfac_error_grows_as_the_chirp_speeds_up(runs):
-    s, _ = runs("case3")
-    mfac = s["rmste"]["mfac"]
-    assert all(b > a for a, b in zip(mfac[1:], mfac[2:])), mfac    # from 30 s on, every window worse
-    assert mfac[-1] > 5.0 * mfac[0]
-
-
 def test_case3_pid_runs_for_comparison(nominal_runs):
     """The PID lane's gains are hand-tuned on the idealised rig: a comparison there only."""
     s, _ = nominal_runs("case3-pid")
@@ -157,9 +149,9 @@ def test_case3_pid_runs_for_comparison(nominal_runs):
 def test_smaller_tu_enters_the_band_sooner(runs):
     a, _ = runs("case2a")
     b, _ = runs("case2b")
-    ta, tb = a["controllers"]["ppc"]["time_to_band_s"], b["controllers"]["ppc"]["time_to_band_s"]
-    assert tb < ta
-    assert tb <= 2.0 and ta <= 6.0     # by t_u
+    assert (a["controllers"]["ppc"]["t_u_s"], b["controllers"]["ppc"]["t_u_s"]) == (6.0, 2.0)
+    assert not acceptance.band_entry_failures(a, b, feasible=True)      # the shipped tasks are
+    assert b["controllers"]["ppc"]["time_to_band_s"] < a["controllers"]["ppc"]["time_to_band_s"]   # strictly, here
 
 
 @pytest.mark.parametrize("case", ["case1", "case2a", "case2b", "case3", "load_change", "constraint_approach"])

@@ -93,3 +93,24 @@ def test_one_run_gives_its_row(tmp_path):
     line, worst = hm.row("X", "constraint_approach", s)
     assert line.startswith("| X | constraint_approach | ") and worst > 0.0
     assert s["controllers"]["ppc"]["final_state"] == "RUNNING"
+
+
+def summary(task: str, time_to_band_s: float, t_u_s: float) -> dict[str, Any]:
+    """A run that meets every criterion of hil/acceptance.py but the band entry it is given."""
+    ppc = {"w1_cm": 0.2, "t_u_s": t_u_s, "guarantee_lost_at_s": None, "fallback_at_s": None,
+           "funnel_wide_at_s": None, "samples_outside_w1_after_tu": 0, "barrier_breaches_after_tu": 0,
+           "constraint_violations": 0, "constraint_violations_true_x": 0, "chatter_ratio": 1.5,
+           "time_to_band_s": time_to_band_s}
+    return {"file": str(scn.find(task)), "duration_s": 10.0, "period_s": 0.001, "windows": [[5.0, 10.0]],
+            "state": {"ppc": "RUNNING"}, "fault_code": {"ppc": "NONE"},
+            "rmste": {"ppc": [0.01], "mfac": [0.02]}, "controllers": {"ppc": ppc, "mfac": {}},
+            "commissioning": {"derivation": {"figures": {"stroke_min_cm": -2.9, "stroke_max_cm": -0.1}}}}
+
+
+def test_acceptance_pairs_each_rigs_case_2b_with_its_case_2a():
+    jobs = [(rig, task, []) for rig in ("R1: x", "R2: y") for task in ("case2a", "case2b")]
+    runs = [summary("case2a", 4.0, 6.0), summary("case2b", 1.0, 2.0),      # R1: 2b first
+            summary("case2a", 1.0, 6.0), summary("case2b", 1.5, 2.0)]      # R2: 2b later
+    failures = hm.acceptance_failures(jobs, runs)
+    assert failures[:3] == [[], [], []]
+    assert len(failures[3]) == 1 and "band entered at 1.5 s (2b" in failures[3][0]

@@ -1,0 +1,119 @@
+# SPDX-License-Identifier: Apache-2.0
+"""The acceptance criteria (hil/acceptance.py) on made-up summaries: a run that meets them all
+passes, and each figure pushed past its limit fails the criterion it belongs to, by name."""
+from __future__ import annotations
+
+import copy
+from typing import Any
+
+import pytest
+
+from hil import acceptance
+from hil import scenario as scn
+
+WINDOWS = [[5.0, 30.0], [30.0, 60.0], [60.0, 90.0], [90.0, 120.0], [120.0, 150.0], [150.0, 180.0]]
+
+
+def good_case3() -> dict[str, Any]:
+    ppc = {"w1_cm": 0.2, "t_u_s": 2.0, "guarantee_lost_at_s": None, "fallback_at_s": None,
+           "funnel_wide_at_s": None, "samples_outside_w1_after_tu": 0, "barrier_breaches_after_tu": 0,
+           "constraint_violations": 0, "constraint_violations_true_x": 0, "chatter_ratio": 1.5,
+           "time_to_band_s": 1.0}
+    return {"file": str(scn.find("case3")), "duration_s": 180.0, "period_s": 0.001, "windows": WINDOWS,
+            "state": {"ppc": "RUNNING", "mfac": "RUNNING"}, "fault_code": {"ppc": "NONE", "mfac": "NONE"},
+            "rmste": {"ppc": [0.003, 0.003, 0.004, 0.005, 0.006, 0.008],
+                      "mfac": [0.004, 0.005, 0.010, 0.020, 0.050, 0.100]},
+            "controllers": {"ppc": ppc, "mfac": {}},
+            "commissioning": {"derivation": {"figures": {"stroke_min_cm": -2.6, "stroke_max_cm": -0.1,
+                                                         "noise_cm": 0.0013}}}}
+
+
+def test_a_run_that_meets_every_criterion_passes():
+    s = good_case3()
+    assert acceptance.summary_feasible(s)
+    assert acceptance.run_failures(s, "case3", True) == []
+
+
+def test_the_reference_beyond_the_stroke_is_infeasible():
+    s = good_case3()
+    # Case 3's reference spans -2.50 .. -1.51 cm: a stroke from -2.2 cm leaves its troughs
+    # (more than w1 / 2 = 0.1 cm below) out of reach
+    s["commissioning"]["derivation"]["figures"]["stroke_min_cm"] = -2.2
+    assert not acceptance.summary_feasible(s)
+    ref = scn.load("case3").reference
+    assert acceptance.reference_feasible(ref, 180.0, -2.45, -0.1, 0.2)     # within w1 / 2
+    assert not acceptance.reference_feasible(ref, 180.0, -2.2, -0.1, 0.2)
+    assert not acceptance.reference_feasible(ref, 180.0, -3.0, -1.7, 0.2)   # its tops
+
+
+@pytest.mark.parametrize("change, words", [
+    (lambda s: s["fault_code"].update(ppc="BARRIER") or s["state"].update(ppc="FAULT"), "ends FAULT / BARRIER"),
+    (lambda s: s["controllers"]["ppc"].update(samples_outside_w1_after_tu=3), "not flagged"),
+    (lambda s: s["controllers"]["ppc"].update(barrier_breaches_after_tu=2), "barrier clamps"),
+    (lambda s: s["controllers"]["ppc"].update(funnel_wide_at_s=3.0), "without a lost guarantee"),
+    (lambda s: s["controllers"]["ppc"].update(guarantee_lost_at_s=9.0, funnel_wide_at_s=9.0),
+     "on a feasible task"),
+    (lambda s: s["controllers"]["ppc"].update(constraint_violations_true_x=1), "band left"),
+    (lambda s: s["controllers"]["ppc"].update(chatter_ratio=3.0), "chatter ratio 3.00"),
+    (lambda s: s["rmste"]["ppc"].__setitem__(0, 0.00402), "5-30 s: 1.005 x MFAC"),
+    (lambda s: s["rmste"]["ppc"].__setitem__(2, 0.005), "60-90 s: ahead of MFAC 2.00 x"),
+    (lambda s: s["rmste"]["mfac"].__setitem__(4, 0.015), "does not grow"),
+])
+def test_each_criterion_fails_by_name(change, words):
+    s = good_case3()
+    change(s)
+    failures = acceptance.run_failures(s, "case3", True)
+    assert any(words in f for f in failures), failures
+
+
+def test_level_within_a_tenth_of_a_percent_passes():
+    s = good_case3()
+    s["rmste"]["ppc"][0] = 0.004 * 1.0009
+    assert acceptance.mfac_failures(s) == []
+
+
+def test_a_lost_guarantee_on_an_infeasible_task_asks_for_the_reaction_not_the_factor():
+    s = good_case3()
+    c = s["controllers"]["ppc"]
+    c.update(guarantee_lost_at_s=70.0, samples_outside_w1_after_tu=40, funnel_wide_at_s=70.0)
+    s["rmste"]["ppc"][3] = 0.015      # 1.3x from 60 s: behind the factor, ahead of MFAC
+    assert acceptance.run_failures(s, "case3", False) == []
+    c.update(funnel_wide_at_s=None)
+    assert acceptance.guarantee_failures(s, False) == ["guarantee lost at 70.00 s and nothing reacted"]
+    c.update(fallback_at_s=60.0)
+    assert "before the loss" in acceptance.guarantee_failures(s, False)[0]
+
+
+def test_chatter_is_a_criterion_of_the_paper_cases_only():
+    s = good_case3()
+    s["controllers"]["ppc"]["chatter_ratio"] = 4.0
+    assert acceptance.chatter_failures(s, "case1") and not acceptance.chatter_failures(s, "load_change")
+
+
+def test_case_2b_enters_the_band_before_2a():
+    a, b = good_case3(), good_case3()
+    a["controllers"]["ppc"].update(t_u_s=6.0, time_to_band_s=4.0)
+    b["controllers"]["ppc"].update(t_u_s=2.0, time_to_band_s=1.5)
+    assert acceptance.band_entry_failures(a, b, True) == []
+    same = copy.deepcopy(a)
+    same["controllers"]["ppc"]["time_to_band_s"] = 1.5     # the same tick as 2b: no later
+    assert acceptance.band_entry_failures(same, b, True) == []
+    late = copy.deepcopy(b)
+    late["controllers"]["ppc"]["time_to_band_s"] = 4.5
+    assert acceptance.band_entry_failures(a, late, True)
+    never = copy.deepcopy(a)
+    never["controllers"]["ppc"]["time_to_band_s"] = None
+    assert acceptance.band_entry_failures(never, b, True)
+    assert acceptance.band_entry_failures(never, b, False) == []    # infeasible: not promised
+
+
+def test_the_factor_is_asked_only_above_the_sensors_floor():
+    s = good_case3()
+    s["rmste"]["ppc"][2], s["rmste"]["mfac"][2] = 0.0045, 0.0062      # 1.4x in 60-90 s
+    assert acceptance.case3_failures(s)                                 # floor 0.0013 cm: measurable
+    s["commissioning"]["derivation"]["figures"]["noise_cm"] = 0.0032    # an 11-bit sensor: 2 floors > 0.0062
+    assert [m for *_, m in acceptance.case3_factor_windows(s)] == [False, True, True, True]
+    assert acceptance.case3_failures(s) == []
+    assert acceptance.mfac_failures(s) == []                            # still ahead of MFAC there
+    s["rmste"]["ppc"][2] = 0.0063
+    assert acceptance.mfac_failures(s)
