@@ -8,6 +8,8 @@
     .venv/bin/python tools/hil_matrix.py --matrix ten --out build/matrix  # and each run's summary
     .venv/bin/python tools/hil_matrix.py --matrix audit2 --jobs 2       # the second audit's eight rigs
     .venv/bin/python tools/hil_matrix.py --matrix random --seed 7 --count 8 --jobs 2   # rigs drawn at random
+    .venv/bin/python tools/hil_matrix.py --matrix random --seed 1 2 3 4 5 --out build/random --reuse \
+        --plot docs/img/random_rigs.png      # five draws, the runs already in build/random kept, a figure
 
 Each run is `python -m hil offline TASK --commission --controller ppc --controller mfac --brief
 --rig PATH=VALUE ... --json FILE` (the firmware offline, both lanes commissioned on that rig over
@@ -17,7 +19,10 @@ hil/scenarios/ or hil/scenarios/realistic/PROFILE/) and rig parameter values (hi
 `--matrix random` draws its rigs instead (RANDOM_RANGES: a base profile, then each property
 scaled or shifted from that profile's own value with a probability of 0.6), so that nobody
 chose them, not even after seeing the rules; --seed makes a draw repeatable.
-Deterministic: the same code (and seed) prints the same table.
+Deterministic: the same code (and seed) prints the same table. `--reuse` takes a run's summary
+from `--out` where it is already there (run_NNN.json, in the order of the jobs: rig by rig, task
+by task, seed by seed), so that a table or figure can be made again without the runs; it is only
+as current as the code that wrote those summaries.
 """
 from __future__ import annotations
 
@@ -222,22 +227,29 @@ def main() -> int:
     ap.add_argument("--matrix", choices=sorted(MATRICES) + ["variants", "random"], required=True)
     ap.add_argument("--jobs", type=int, default=1, help="runs at a time (default 1)")
     ap.add_argument("--out", type=Path, help="keep each run's summary JSON in this folder")
-    ap.add_argument("--seed", type=int, help="--matrix random: the draw's seed (default 1)")
+    ap.add_argument("--seed", type=int, nargs="+", help="--matrix random: the draws' seeds (default 1)")
     ap.add_argument("--count", type=int, help="--matrix random: how many rigs (default 8)")
     ap.add_argument("--quick", action="store_true", help="Case 3's --quick run (its first 60 s)")
+    ap.add_argument("--reuse", action="store_true", help="take each run's summary from --out where it is there")
+    ap.add_argument("--plot", type=Path, help="a figure of every run's PPC / MFAC RMSTE per window (PNG)")
     args = ap.parse_args()
     if args.jobs < 1:
         ap.error("--jobs must be at least 1")
     if args.matrix != "random" and (args.seed is not None or args.count is not None):
         ap.error("--seed and --count go with --matrix random only")
-    args.seed = 1 if args.seed is None else args.seed
+    seeds: list[int] = [1] if args.seed is None else args.seed
     args.count = 8 if args.count is None else args.count
     if args.count < 1:
         ap.error("--count must be at least 1")
-    if args.seed < 0:
-        ap.error("--seed must be >= 0")
+    if any(s < 0 for s in seeds) or len(set(seeds)) != len(seeds):
+        ap.error("--seed: each seed >= 0, each once")
     if args.out is not None and args.out.exists() and not args.out.is_dir():
         ap.error(f"--out {args.out}: exists and is not a folder")
+    if args.reuse and args.out is None:
+        ap.error("--reuse takes the summaries from --out: give --out")
+    if args.plot is not None and (args.plot.suffix.lower() != ".png" or not args.plot.parent.is_dir()
+                                  or args.plot.is_dir()):
+        ap.error(f"--plot {args.plot}: a .png file in an existing folder")
     out = args.out or Path(tempfile.mkdtemp(prefix="hil_matrix_"))
     out.mkdir(parents=True, exist_ok=True)
     jobs: list[tuple[str, str, list[str]]] = []
@@ -246,7 +258,10 @@ def main() -> int:
             jobs.append((f.stem, "", [str(f)]))
     else:
         if args.matrix == "random":
-            rigs, quick3 = random_rigs(args.seed, args.count), args.quick
+            draws = [random_rigs(s, args.count) for s in seeds]
+            rigs = tuple(draws[0]) if len(seeds) == 1 else tuple(
+                Rig(f"S{s} {r.name}", r.profile, r.values) for s, d in zip(seeds, draws) for r in d)
+            quick3 = args.quick
         else:
             rigs, quick3 = MATRICES[args.matrix]
             quick3 = quick3 or args.quick
@@ -260,7 +275,11 @@ def main() -> int:
                 jobs.append((rig.name, label, [task_file(rig.profile, task), *extra, *rig_args]))
 
     def one(i: int) -> dict[str, Any]:
-        return run(jobs[i][2], out / f"run_{i:03d}.json")
+        json_path = out / f"run_{i:03d}.json"
+        if args.reuse and json_path.exists():
+            kept: list[dict[str, Any]] = json.loads(json_path.read_text())
+            return kept[0]
+        return run(jobs[i][2], json_path)
 
     with ThreadPoolExecutor(max_workers=args.jobs) as pool:
         summaries = list(pool.map(one, range(len(jobs))))
@@ -275,7 +294,61 @@ def main() -> int:
     print(f"\n{ahead} of {len(jobs)} runs with the paper's controller ahead of MFAC or level (0.1 %) in every window"
           f" (summaries: {out})")
     print_acceptance(jobs, summaries)
+    if args.plot is not None:
+        plot(jobs, summaries, args.plot)
+        print(f"figure: {args.plot}")
     return 0
+
+
+def sensor_bits(args: list[str]) -> int:
+    """The run's sensor resolution [bits]: its --rig sensor.adc_bits, else its scenario's rig's."""
+    from hil.scenario import load
+    for a in args:
+        if a.startswith("sensor.adc_bits="):
+            return int(a.split("=", 1)[1])
+    return int(load(args[0]).rig_params().sensor.adc_bits)
+
+
+def plot(jobs: list[tuple[str, str, list[str]]], summaries: list[dict[str, Any]], path: Path) -> None:
+    """Every run's PPC / MFAC RMSTE per window, one panel per task, coloured by the sensor's
+    resolution: below 1 the paper's controller is ahead; a lost guarantee is a hollow marker."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    tasks = list(dict.fromkeys(task for _, task, _ in jobs))
+    cols = 3
+    rows = (len(tasks) + cols - 1) // cols
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.2 * rows), squeeze=False, sharey=True)
+    colours = {10: "tab:red", 11: "tab:orange", 12: "tab:blue"}
+    for ax, task in zip(axes.flat, tasks):
+        runs = [(args, s) for (_, t, args), s in zip(jobs, summaries) if t == task]
+        for k, (args, s) in enumerate(runs):
+            ratios = [a / b for a, b in zip(s["rmste"]["ppc"], s["rmste"]["mfac"])]
+            lost = s["controllers"]["ppc"]["guarantee_lost_at_s"] is not None
+            colour = colours.get(sensor_bits(args), "tab:gray")
+            x = np.arange(len(ratios)) + 0.6 * (k / max(len(runs) - 1, 1) - 0.5)   # the runs side by side
+            ax.scatter(x, ratios, s=12, facecolors="none" if lost else colour, edgecolors=colour, linewidths=0.8)
+        windows = runs[0][1]["windows"]
+        ax.set_xticks(range(len(windows)), [f"{w[0]:g}-{w[1]:g}" for w in windows], fontsize=7)
+        ax.axhline(1.0, color="k", lw=0.8)
+        if task.startswith("case3") and len(windows) > 2:
+            ax.hlines(1.0 / acceptance.CASE3_FACTOR, 1.5, len(windows) - 0.5, color="k", lw=0.8, ls="--")
+        ax.set_yscale("log")
+        ax.set_title(task, fontsize=9)
+        ax.set_xlabel("window [s]", fontsize=8)
+    for ax in axes.flat[len(tasks):]:
+        ax.set_visible(False)
+    for ax in axes[:, 0]:
+        ax.set_ylabel("PPC / MFAC RMSTE", fontsize=8)
+    handles = [plt.Line2D([], [], marker="o", ls="", color=c, label=f"{b}-bit sensor") for b, c in colours.items()]
+    handles.append(plt.Line2D([], [], marker="o", ls="", mfc="none", color="k", label="guarantee lost (flagged)"))
+    fig.legend(handles=handles, loc="lower center", ncol=4, fontsize=8, frameon=False)
+    fig.suptitle(f"{len(jobs)} runs: the paper's controller over MFAC, each commissioned on its rig "
+                 "(below 1: ahead; dashed: Case 3's 2x)", fontsize=9)
+    fig.tight_layout(rect=(0, 0.05, 1, 0.96))
+    fig.savefig(path, dpi=110, metadata={"Software": None})
+    plt.close(fig)
 
 
 def acceptance_failures(jobs: list[tuple[str, str, list[str]]], summaries: list[dict[str, Any]]) -> list[list[str]]:

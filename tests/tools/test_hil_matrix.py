@@ -3,6 +3,7 @@
 (each a real rig parameter), its options; one real run, offline, where the library is built."""
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -81,7 +82,10 @@ def test_bad_options_exit_2(tmp_path):
     for args in (["--matrix", "eleven"], ["--matrix", "ten", "--jobs", "0"], [],
                  ["--matrix", "random", "--count", "0"], ["--matrix", "random", "--seed", "-1"],
                  ["--matrix", "ten", "--seed", "3"], ["--matrix", "seven", "--count=2"],
-                 ["--matrix", "random", "--out", str(a_file)]):
+                 ["--matrix", "random", "--out", str(a_file)], ["--matrix", "random", "--seed", "1", "1"],
+                 ["--matrix", "random", "--reuse"], ["--matrix", "random", "--plot", str(tmp_path / "f.svg")],
+                 ["--matrix", "random", "--plot", str(tmp_path / "no" / "f.png")],
+                 ["--matrix", "random", "--plot", str(tmp_path)]):
         r = subprocess.run([sys.executable, str(TOOL), *args], capture_output=True, text=True)
         assert r.returncode == 2, (args, r.stderr)
         assert "Traceback" not in r.stderr
@@ -114,3 +118,22 @@ def test_acceptance_pairs_each_rigs_case_2b_with_its_case_2a():
     failures = hm.acceptance_failures(jobs, runs)
     assert failures[:3] == [[], [], []]
     assert len(failures[3]) == 1 and "band entered at 1.5 s (2b" in failures[3][0]
+
+
+def test_reuse_makes_the_table_and_figure_again_from_the_summaries(tmp_path):
+    """--reuse with every run's summary already in --out: no run is made (these summaries are
+    made up: a run would overwrite them), and the table, the criteria and the figure come from them."""
+    for i, task in enumerate(hm.TASKS):
+        s = summary(task, 1.0, 6.0 if task == "case2a" else 2.0)
+        s["rmste"]["ppc"] = [0.03] if task == "load_change" else [0.01]          # one run behind MFAC
+        for lane_name in ("ppc", "mfac"):
+            s["controllers"][lane_name].update(lane(s["rmste"][lane_name]))
+        (tmp_path / f"run_{i:03d}.json").write_text(json.dumps([s]))
+    png = tmp_path / "f.png"
+    r = subprocess.run([sys.executable, str(TOOL), "--matrix", "random", "--count", "1", "--out", str(tmp_path),
+                        "--reuse", "--plot", str(png)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.count("| R1: ") == len(hm.TASKS)
+    assert "5 of 6 runs with the paper's controller ahead" in r.stdout
+    assert "5 of 6 runs meet every acceptance criterion" in r.stdout and "load_change: 5-10 s: 1.500 x" in r.stdout
+    assert png.stat().st_size > 10_000 and png.read_bytes()[:4] == b"\x89PNG"
