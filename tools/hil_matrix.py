@@ -357,7 +357,9 @@ def acceptance_failures(jobs: list[tuple[str, str, list[str]]], summaries: list[
     failures, feasible = [], []
     for (_, task, _), s in zip(jobs, summaries):
         feasible.append(acceptance.summary_feasible(s))
-        failures.append(acceptance.run_failures(s, task.split()[0], feasible[-1]))
+        # a quick Case 3 ("case3 (quick)", the chirp's slow start) is not the paper's case: its
+        # chatter ratio has next to no needed motion to divide by, and it has no windows from 60 s
+        failures.append(acceptance.run_failures(s, task, feasible[-1]))
     by_rig: dict[str, dict[str, int]] = {}
     for i, (label, task, _) in enumerate(jobs):
         by_rig.setdefault(label, {})[task] = i
