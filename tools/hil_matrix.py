@@ -315,6 +315,7 @@ def plot(jobs: list[tuple[str, str, list[str]]], summaries: list[dict[str, Any]]
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
 
     tasks = list(dict.fromkeys(task for _, task, _ in jobs))
     cols = 3
@@ -341,8 +342,8 @@ def plot(jobs: list[tuple[str, str, list[str]]], summaries: list[dict[str, Any]]
         ax.set_visible(False)
     for ax in axes[:, 0]:
         ax.set_ylabel("PPC / MFAC RMSTE", fontsize=8)
-    handles = [plt.Line2D([], [], marker="o", ls="", color=c, label=f"{b}-bit sensor") for b, c in colours.items()]
-    handles.append(plt.Line2D([], [], marker="o", ls="", mfc="none", color="k", label="guarantee lost (flagged)"))
+    handles = [Line2D([], [], marker="o", ls="", color=c, label=f"{b}-bit sensor") for b, c in colours.items()]
+    handles.append(Line2D([], [], marker="o", ls="", mfc="none", color="k", label="guarantee lost (flagged)"))
     fig.legend(handles=handles, loc="lower center", ncol=4, fontsize=8, frameon=False)
     fig.suptitle(f"{len(jobs)} runs: the paper's controller over MFAC, each commissioned on its rig "
                  "(below 1: ahead; dashed: Case 3's 2x)", fontsize=9)
