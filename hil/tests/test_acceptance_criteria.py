@@ -69,7 +69,7 @@ def test_each_criterion_fails_by_name(change, words):
 def test_level_within_a_tenth_of_a_percent_passes():
     s = good_case3()
     s["rmste"]["ppc"][0] = 0.004 * 1.0009
-    assert acceptance.mfac_failures(s) == []
+    assert acceptance.behind_mfac_failures(s) == []
 
 
 def test_a_lost_guarantee_on_an_infeasible_task_asks_for_the_reaction_not_the_factor():
@@ -116,6 +116,6 @@ def test_the_factor_is_asked_only_above_the_sensors_floor():
     s["commissioning"]["derivation"]["figures"]["noise_cm"] = 0.0032    # an 11-bit sensor: 2 floors > 0.0062
     assert [m for *_, m in acceptance.case3_factor_windows(s)] == [False, True, True, True]
     assert acceptance.case3_failures(s) == []
-    assert acceptance.mfac_failures(s) == []                            # still ahead of MFAC there
+    assert acceptance.behind_mfac_failures(s) == []                            # still ahead of MFAC there
     s["rmste"]["ppc"][2] = 0.0063
-    assert acceptance.mfac_failures(s)
+    assert acceptance.behind_mfac_failures(s)
