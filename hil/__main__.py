@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from . import scenario as scn
-from .options import OptionError, out_dir, positive_number
+from .options import NOISE_LIMIT_HELP, OptionError, noise_limit, out_dir, positive_number
 
 REPO = Path(__file__).resolve().parents[1]
 WITH_VCAN = REPO / "hil" / "with-vcan"
@@ -94,6 +94,7 @@ def cmd_run(args: argparse.Namespace, argv: list[str]) -> int:
     from .runner import RunError, Runner, RunOptions
     try:
         sc = scn.load(args.scenario)
+        sc.noise_limit = noise_limit(args.noise_limit, args.commission)
         out = out_dir("--out", args.out)      # before the bus set-up and a re-run in the vcan guest
     except (scn.ScenarioError, OptionError) as e:
         print(f"hil: {e}", file=sys.stderr)
@@ -221,6 +222,7 @@ def main(argv: list[str] | None = None) -> int:
                    help="before ARM, run `pmactl commission` over CAN on the node of each lane with "
                         "commission = true (ppc, mfac), on its own rig, and run the lane on the derived set plus "
                         "the task's own parameters; what was measured and derived goes into summary.json")
+    r.add_argument("--noise-limit", type=float, metavar="K", help=NOISE_LIMIT_HELP)
     can_opts(r)
     r.add_argument("--board", action="store_true",
                    help="drive an external node (a board) in real time instead of starting pma-fw-host")

@@ -57,7 +57,8 @@ def tell_wiring(node: PmaNode, sc: Scenario) -> None:
 def task_of(sc: Scenario, label: str | None = None) -> Task:
     """The task of the scenario's lane (default: its first commissioned or PPC lane): w1 and t_u
     (a lane without them, e.g. MFAC, takes those of the scenario's first PPC lane), the
-    constraints, where the reference starts, the range it spans and how fast it gets."""
+    constraints, where the reference starts, the range it spans and how fast it gets (its largest and
+    mean speed), and the scenario's noise_limit."""
     ctrl = _lane(sc, label)
     own = {**sc.params, **next((c.params for c in sc.controllers if c.mode == "PPC"), {}), **ctrl.params}
     proto = protocol()
@@ -68,6 +69,7 @@ def task_of(sc: Scenario, label: str | None = None) -> Task:
                 t_u_s=float(own.get("ppc.t_u_s", proto.param("ppc.t_u_s").default)),
                 x_min_cm=x_min, x_max_cm=x_max,
                 x_start_cm=float(xr[0]), speed_cm_s=float(np.max(np.abs(np.diff(xr))) / 1e-3),
+                mean_speed_cm_s=float(np.mean(np.abs(np.diff(xr))) / 1e-3), noise_limit=sc.noise_limit,
                 x_ref_min_cm=float(np.min(xr)), x_ref_max_cm=float(np.max(xr)))
 
 

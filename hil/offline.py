@@ -39,7 +39,7 @@ from typing import Any
 from pmactl.rules import RuleError, set_order
 
 from . import scenario as scn
-from .options import OptionError, out_dir, out_file
+from .options import NOISE_LIMIT_HELP, OptionError, noise_limit, out_dir, out_file
 from .report import print_summary
 from .rig import Rig
 from .rig_params import RigParams, parse_text
@@ -660,6 +660,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="run `pmactl commission` on each variant's rig first (over CAN frames, offline) and put "
                         "the lanes with commission = true (ppc, mfac) on the derived set plus the task's own "
                         "parameters (docs/commissioning.md); what was measured and derived goes into the summary")
+    p.add_argument("--noise-limit", type=float, metavar="K", help=NOISE_LIMIT_HELP)
 
 
 def main(args: argparse.Namespace) -> int:
@@ -676,6 +677,7 @@ def main(args: argparse.Namespace) -> int:
             sc.controllers = keep
         if args.jobs < 1:
             raise OptionError("--jobs must be at least 1")
+        sc.noise_limit = noise_limit(args.noise_limit, args.commission)
         if args.seed is not None:
             sc.seed = _seed("--seed", args.seed)
         if args.duration is not None:

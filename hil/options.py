@@ -23,6 +23,20 @@ def positive_number(option: str, value: float, hi: float = math.inf, unit: str =
     return value
 
 
+NOISE_LIMIT_HELP = ("with --commission: commission with `pmactl commission --noise-limit K` (a quieter valve: the "
+                    "sensor's noise may move the input at most K times what the reference needs, at some "
+                    "accuracy; docs/commissioning.md)")
+
+
+def noise_limit(value: float | None, commission: bool) -> float | None:
+    """--noise-limit K of hil run / offline: a finite number > 0, and only with --commission."""
+    if value is None:
+        return None
+    if not commission:
+        raise OptionError("--noise-limit is a commissioning option: add --commission")
+    return positive_number("--noise-limit", value)
+
+
 def _first_existing(path: Path) -> Path:
     p = path.absolute()
     while not p.exists() and p != p.parent:

@@ -134,6 +134,9 @@ class Scenario:
     expect: Expect
     settle_s: float = 0.5           # idle ticks before ARM (rig vented, samples flowing)
     armed_s: float = 1.0            # ARMED at the preset pressure before START
+    # hil run/offline --commission --noise-limit K: the commissioning's bound on the input's
+    # motion from the sensor's noise (pmactl commission --noise-limit; None: none)
+    noise_limit: float | None = None
 
     # ---------------------------------------------------------------- derived --
     def rig_params(self) -> RigParams:

@@ -29,6 +29,7 @@ from __future__ import annotations
 import argparse
 import functools
 import json
+import math
 import subprocess
 import sys
 import tempfile
@@ -206,8 +207,24 @@ def run(args: list[str], json_path: Path) -> dict[str, Any]:
     return summaries[0]
 
 
-def fmt(values: list[float | None]) -> str:
-    return " ".join("-" if v is None else f"{v:.4f}" for v in values)
+def print_chatter(jobs: list[tuple[str, str, list[str]]], summaries: list[dict[str, Any]]) -> None:
+    """Each run's chatter ratio (the pressure command's total variation over what the reference
+    needs, hil/metrics.py) for both lanes, and the velocity observer commissioning chose."""
+    print("\n| rig | task | chatter ppc | chatter mfac | vel.fc_hz | noise / need (commissioning) |")
+    print("|---|---|---|---|---|---|")
+    for (label, task, _), s in zip(jobs, summaries):
+        p, m = s["controllers"]["ppc"], s["controllers"]["mfac"]
+        d = (s.get("commissioning") or {}).get("derivation", {})
+        f = d.get("figures", {})
+        need = f.get("need_input_rate_u_per_s") or 0.0
+        ratio = "-" if need <= 0 else f"{f['noise_input_rate_u_per_s'] / need:.2f}"
+        fc = d.get("params", {}).get("vel.fc_hz")
+        print(f"| {label} | {task} | {fmt([p['chatter_ratio']], 2)} | {fmt([m['chatter_ratio']], 2)} | "
+              f"{'-' if fc is None else f'{fc:.2f}'} | {ratio} |")
+
+
+def fmt(values: list[float | None], digits: int = 4) -> str:
+    return " ".join("-" if v is None else f"{v:.{digits}f}" for v in values)
 
 
 def row(label: str, task: str, s: dict[str, Any]) -> tuple[str, float]:
@@ -232,6 +249,10 @@ def main() -> int:
     ap.add_argument("--quick", action="store_true", help="Case 3's --quick run (its first 60 s)")
     ap.add_argument("--reuse", action="store_true", help="take each run's summary from --out where it is there")
     ap.add_argument("--plot", type=Path, help="a figure of every run's PPC / MFAC RMSTE per window (PNG)")
+    ap.add_argument("--noise-limit", type=float, metavar="K",
+                    help="commission every rig with `pmactl commission --noise-limit K` (docs/commissioning.md)")
+    ap.add_argument("--chatter", action="store_true",
+                    help="also a table of each run's chatter ratio and the observer commissioning chose")
     args = ap.parse_args()
     if args.jobs < 1:
         ap.error("--jobs must be at least 1")
@@ -245,6 +266,9 @@ def main() -> int:
         ap.error("--seed: each seed >= 0, each once")
     if args.out is not None and args.out.exists() and not args.out.is_dir():
         ap.error(f"--out {args.out}: exists and is not a folder")
+    if args.noise_limit is not None and not (math.isfinite(args.noise_limit) and args.noise_limit > 0):
+        ap.error(f"--noise-limit: expected a finite number > 0, got {args.noise_limit!r}")
+    limit = [] if args.noise_limit is None else ["--noise-limit", repr(args.noise_limit)]
     if args.reuse and args.out is None:
         ap.error("--reuse takes the summaries from --out: give --out")
     if args.plot is not None and (args.plot.suffix.lower() != ".png" or not args.plot.parent.is_dir()
@@ -255,7 +279,7 @@ def main() -> int:
     jobs: list[tuple[str, str, list[str]]] = []
     if args.matrix == "variants":
         for f in sorted((ROOT / "hil/scenarios/variants").glob("*.toml")):
-            jobs.append((f.stem, "", [str(f)]))
+            jobs.append((f.stem, "", [str(f), *limit]))
     else:
         if args.matrix == "random":
             draws = [random_rigs(s, args.count) for s in seeds]
@@ -272,7 +296,7 @@ def main() -> int:
                 extra = ["--quick"] if quick3 and task == "case3" else []
                 rig_args = [a for v in rig.values.split() for a in ("--rig", v)]
                 label = f"{task} (quick)" if extra else task
-                jobs.append((rig.name, label, [task_file(rig.profile, task), *extra, *rig_args]))
+                jobs.append((rig.name, label, [task_file(rig.profile, task), *extra, *rig_args, *limit]))
 
     def one(i: int) -> dict[str, Any]:
         json_path = out / f"run_{i:03d}.json"
@@ -294,6 +318,8 @@ def main() -> int:
     print(f"\n{ahead} of {len(jobs)} runs with the paper's controller ahead of MFAC or level (0.1 %) in every window"
           f" (summaries: {out})")
     print_acceptance(jobs, summaries)
+    if args.chatter:
+        print_chatter(jobs, summaries)
     if args.plot is not None:
         plot(jobs, summaries, args.plot)
         print(f"figure: {args.plot}")

@@ -33,6 +33,7 @@ from pmactl.commission_rules import (
     derive,
     fit_step,
     law_margins,
+    law_noise_rate,
     loop_margins,
     mfac_phi1,
 )
@@ -351,6 +352,105 @@ def test_derive_places_the_observer_and_reports_the_loop_with_it(theta):
     assert slower["phase_margin_deg"] < f["with_observer_phase_margin_deg"] < d.margins["phase_margin_deg"]
 
 
+def test_law_noise_rate_is_the_mean_input_change_that_white_noise_makes():
+    """law_noise_rate against white Gaussian noise through the law's recursion, tick by tick: the
+    mean |u_k - u_(k-1)| per period, within the sample mean's spread; linear in the noise, and
+    about the square of the observer's bandwidth (its velocity's change per tick)."""
+    k_v, k_p, k_ff, fc, period, sigma = 2.5, 8.0, 240.0, 15.0, 1e-3, 0.002
+    rng = np.random.default_rng(3)
+    x = rng.normal(0.0, sigma, 200_000)
+    p = math.exp(-2.0 * math.pi * fc * period)
+    x_hat = v_hat = u_ff = u_last = 0.0
+    changes = np.empty(x.size)
+    for k, xk in enumerate(x):
+        r = xk - (x_hat + period * v_hat)
+        x_hat += period * v_hat + (1.0 - p * p) * r
+        v_hat += (1.0 - p) ** 2 / period * r
+        u_law = k_v * (k_p * x_hat + v_hat)
+        u_ff += k_ff * period * u_law
+        changes[k] = abs(u_law + u_ff - u_last)
+        u_last = u_law + u_ff
+    simulated = float(np.mean(changes[2000:])) / period      # after the start's transient
+    assert law_noise_rate(k_v, k_p, k_ff, fc, period, sigma) == pytest.approx(simulated, rel=0.02)
+    assert law_noise_rate(k_v, k_p, k_ff, fc, period, 2 * sigma) == pytest.approx(
+        2 * law_noise_rate(k_v, k_p, k_ff, fc, period, sigma), rel=1e-9)
+    ratio = law_noise_rate(k_v, k_p, k_ff, 2 * fc, period, sigma) / law_noise_rate(k_v, k_p, k_ff, fc, period, sigma)
+    assert 3.0 < ratio < 4.5
+
+
+def _noisy(noise_cm: float) -> Measured:
+    m = _measured(theta=0.02, tau=0.06)
+    m.noise_cm = noise_cm
+    return m
+
+
+def _task(mean_speed: float | None, noise_limit: float | None = 2.0) -> Task:
+    return Task(w1_cm=0.2, t_u_s=2.0, x_min_cm=-3.0, x_max_cm=0.0, x_start_cm=-2.0, speed_cm_s=0.4,
+                mean_speed_cm_s=mean_speed, noise_limit=noise_limit)
+
+
+@pytest.mark.parametrize("limit", [2.0, 3.5])
+def test_a_noise_limit_slows_the_observer_until_its_noise_moves_the_input_no_more_than_asked(limit):
+    """With a noise limit K (pmactl commission --noise-limit), where the sensor's noise through the
+    law would move the input more than K times what the reference needs, the observer comes down in
+    steps of FC_NOISE_STEP, the loop loosening with it to keep the margins, until it does not: the
+    first step down that meets the bound. Without one, the observer stays where the margins put
+    it and the report warns."""
+    free = derive(_noisy(0.003), _task(0.05, None))      # no bound: the margins' observer
+    assert free.params["vel.fc_hz"] == derive(_noisy(0.003), _task(0.0)).params["vel.fc_hz"]
+    assert free.figures["noise_limit"] == 0.0
+    assert any("chatter" in w and "--noise-limit" in w for w in free.warnings)
+    d = derive(_noisy(0.003), _task(0.05, limit))
+    f, p = d.figures, d.params
+    need = abs(p["ppc.ref_ff"]) * 0.05
+    assert f["need_input_rate_u_per_s"] == pytest.approx(need, rel=1e-3)
+    assert f["noise_limit"] == limit
+    assert {k: v for k, v in d.params.items() if k.startswith("mfac.")} == \
+        {k: v for k, v in free.params.items() if k.startswith("mfac.")}       # MFAC has no observer
+    assert free.figures["noise_input_rate_u_per_s"] > limit * need   # the case is real
+    assert f["noise_input_rate_u_per_s"] <= limit * need
+    assert p["vel.fc_hz"] < free.params["vel.fc_hz"]
+    assert f["tau_c_s"] >= free.figures["tau_c_s"] and _as_built_keeps_margins(f)
+    # one step faster, the loop the margins allow there is too noisy
+    fc_up = p["vel.fc_hz"] / rules.FC_NOISE_STEP
+    if fc_up < free.params["vel.fc_hz"]:
+        gain, tau, theta = f["loop_gain_cm_per_u"], f["tau_s"], f["theta_eff_s"]
+        shape, _ = rules._tightest_at(gain, tau, theta, fc_up)
+        assert rules._noise_rate(shape, fc_up, 1e-3, 0.003) > limit * need
+    # the noise the report states is the loop's as derived
+    assert f["noise_input_rate_u_per_s"] == pytest.approx(law_noise_rate(
+        f["k_v_u_per_cm_s"], f["k_p_per_s"], p["ppc.ff_gain_per_s"], p["vel.fc_hz"], 1e-3, 0.003), rel=2e-3)
+    assert not any("chatter" in w for w in d.warnings)
+
+
+def test_a_noise_limit_that_is_not_a_positive_number_is_refused():
+    for bad in (0.0, -1.0, math.nan, math.inf):
+        with pytest.raises(CommissionError, match="noise limit"):
+            derive(_noisy(0.003), _task(0.05, bad))
+
+
+def test_a_quiet_sensor_or_no_speed_leaves_the_observer_where_the_margins_put_it():
+    quiet = derive(_noisy(1e-5), _task(0.05))
+    assert quiet.params["vel.fc_hz"] == derive(_noisy(1e-5), _task(0.0)).params["vel.fc_hz"]
+    # no mean speed given: a sine's, 2 / pi of the largest
+    sine = derive(_noisy(0.003), _task(None))
+    assert sine.figures["need_input_rate_u_per_s"] == pytest.approx(
+        abs(sine.params["ppc.ref_ff"]) * 2.0 / math.pi * 0.4, rel=1e-3)
+
+
+def test_a_sensor_too_noisy_for_any_observer_is_said_and_the_margins_stay():
+    """The observer comes down only as far as a loop keeps the margins: below that, the noise
+    stays and the report says what to expect."""
+    d = derive(_noisy(0.05), _task(0.01))
+    f, p = d.figures, d.params
+    assert any("chatter" in w and "slowest observer" in w for w in d.warnings)
+    assert _as_built_keeps_margins(f)
+    fc_down = max(rules.FC_NOISE_STEP * p["vel.fc_hz"], rules.FC_MIN_HZ)
+    if fc_down < p["vel.fc_hz"]:
+        _, below = rules._tightest_at(f["loop_gain_cm_per_u"], f["tau_s"], f["theta_eff_s"], fc_down)
+        assert not rules._keeps_margins(below)
+
+
 def test_integral_loop_gain_max_of_a_pure_delay():
     # K e^{-theta s} / s: PM = 90 deg - K theta and GM = pi / (2 K theta): both limits (45 deg, 2)
     # meet at K = pi / (4 theta)
@@ -488,6 +588,11 @@ def test_commission_refuses_a_band_outside_the_stroke(rig_node):
     ["commission", "--w1", "2", "--t-u", "2", "--x-min", "-3", "--x-max", "0"],   # band narrower than 2 w1
     ["commission", "--w1", "0.2", "--t-u", "2", "--x-min", "0", "--x-max", "-3"],
     ["commission", "--t-u", "2"],
+    ["commission", "--w1", "0.2", "--t-u", "2", "--speed", "0.5", "--mean-speed", "0.6"],   # mean above largest
+    ["commission", "--w1", "0.2", "--t-u", "2", "--speed", "0.5", "--mean-speed", "-0.1"],
+    ["commission", "--w1", "0.2", "--t-u", "2", "--noise-limit", "0"],
+    ["commission", "--w1", "0.2", "--t-u", "2", "--noise-limit", "inf"],
+    ["commission", "--w1", "0.2", "--t-u", "2", "--noise-limit", "two"],
 ])
 def test_cli_refuses_bad_options_before_sending(rig_node, monkeypatch, argv):
     bus, node = rig_node
@@ -507,12 +612,19 @@ def test_cli_commission_writes_its_report(rig_node, monkeypatch, tmp_path: Path,
     out = capsys.readouterr().out
     assert code == cli.EXIT_OK, out
     assert "phase margin" in out and "nothing changed on the node" in out
+    assert "the sensor's noise through the law moves the input" in out and "a set-point task" in out
     for f in ("report.json", "params.json", "commissioning.png"):
         assert (tmp_path / f).exists()
     # the parameter file loads with pmactl's own reader
     from pmactl import paramfile
     entries = paramfile.load(str(tmp_path / "params.json"), scn.protocol())
     assert {p.name for p, _ in entries} >= {"act.polarity", "act.p0_kpa", "ppc.a_cm_s", "mfac.phi1"}
+    # a tracking task with a noise limit: the report weighs the noise against the need, and says the bound
+    code = cli.main(["--node", "1", "commission", "--w1", "0.2", "--t-u", "2", "--x-start", "-2", "--speed", "0.4",
+                     "--noise-limit", "1.5", "--quiet"])
+    out = capsys.readouterr().out
+    assert code == cli.EXIT_OK, out
+    assert "--noise-limit 1.5" in out
 
 
 def test_hil_offline_runs_the_ppc_lane_on_the_commissioned_set(tmp_path: Path, capsys):
@@ -569,3 +681,19 @@ def test_an_explicit_set_wins_over_the_commissioned_value(tmp_path: Path):
     assert got["ppc.a_cm_s"] == 1.5
     assert got["ppc.ref_ff"] == json.loads((tmp_path / "commissioning.json").read_text())["derivation"]["params"][
         "ppc.ref_ff"]
+
+
+def test_the_harness_commissions_with_the_scenarios_noise_limit():
+    """hil run/offline --commission --noise-limit K: the scenario's noise_limit reaches the
+    commissioning's task, and on a 4x coarser sensor it slows the observer the margins chose."""
+    from hil.commissioned import commission, task_of
+    sc = scn.load("variants/case3_coarse_sensor")
+    assert task_of(sc).noise_limit is None
+    free = commission(sc).derivation
+    sc.noise_limit = 2.0
+    assert task_of(sc).noise_limit == 2.0
+    quiet = commission(sc).derivation
+    assert quiet.figures["noise_limit"] == 2.0 and free.figures["noise_limit"] == 0.0
+    assert free.figures["noise_input_rate_u_per_s"] > 2.0 * free.figures["need_input_rate_u_per_s"]
+    assert quiet.figures["noise_input_rate_u_per_s"] <= 2.0 * quiet.figures["need_input_rate_u_per_s"]
+    assert quiet.params["vel.fc_hz"] < free.params["vel.fc_hz"]

@@ -114,6 +114,9 @@ def test_a_tick_runs_the_controller_and_sends_telemetry(node):
     (["case2b", "--grid", "ppc.c=1,1e9"], "outside"),
     (["case2b", "--controller", "nope"], "no controller nope"),
     (["case2b", "--jobs", "0"], "--jobs"),
+    (["case2b", "--noise-limit", "2"], "add --commission"),
+    (["case2b", "--commission", "--noise-limit", "0"], "--noise-limit"),
+    (["case2b", "--commission", "--noise-limit", "nan"], "--noise-limit"),
     (["case2b", "--set", "ctrl.mode=2"], "ctrl.mode"),
     (["no_such_scenario"], "no scenario"),
 ])

@@ -109,6 +109,8 @@ def test_metrics_on_known_signals():
     (["run", "case3", "--out", "x", "--board"], 2),       # a board runs one controller at a time
     (["run", "case1", "--out", "x", "--controller", "ppc-paper", "--interface", "no_such_interface"], 2),
     (["run", "case1", "--out", "x"], 2),                  # its ppc and mfac lanes need --commission
+    (["run", "case1", "--out", "x", "--noise-limit", "2"], 2),                   # a commissioning option
+    (["run", "case1", "--out", "x", "--commission", "--noise-limit", "-1"], 2),
     (["frobnicate"], 2),
 ])
 def test_bad_command_lines_are_refused(argv, code, tmp_path, monkeypatch):

@@ -141,6 +141,7 @@ def _positive_value(unit: str) -> Callable[[str], float]:
 
 _positive = _positive_value("seconds")
 _positive_cm = _positive_value("cm")
+_positive_ratio = _positive_value("times what the reference needs")
 
 
 def _text(what: str) -> Callable[[str], str]:
@@ -330,6 +331,15 @@ def build_parser() -> argparse.ArgumentParser:
                         "(default: the band's middle)")
     p.add_argument("--speed", type=_nonnegative, default=0.0, metavar="CM_S",
                    help="the reference's largest speed [cm/s] (default 0: set-points)")
+    p.add_argument("--mean-speed", type=_nonnegative, metavar="CM_S",
+                   help="the reference's mean speed |dx_r/dt| [cm/s], at most --speed: what the sensor's "
+                        "noise through the law is weighed against (default: a sine's, 2/pi of "
+                        "--speed)")
+    p.add_argument("--noise-limit", type=_positive_ratio, metavar="K",
+                   help="a quieter valve: the velocity observer slower (and the loop the margins then allow) "
+                        "until the sensor's noise moves the input at most K times what the reference needs, "
+                        "at some accuracy (docs/commissioning.md, 'A quieter valve'; default: no bound, the "
+                        "observer as fast as the margins want)")
     p.add_argument("--out", metavar="DIR", type=_file_name,
                    help="write report.json, params.json (the params dump format) and figures (static map, "
                         "step responses, noise) into DIR")
@@ -1179,6 +1189,9 @@ def cmd_commission(s: Session) -> int:
     args = s.args
     if args.save and not args.apply:
         raise UsageError("--save needs --apply (nothing is set without it)")
+    if args.mean_speed is not None and args.mean_speed > args.speed:
+        raise UsageError(f"--mean-speed {args.mean_speed:g} cm/s exceeds --speed {args.speed:g} cm/s "
+                         "(the reference's largest speed)")
     out_dir = Path(args.out) if args.out is not None else None
     if out_dir is not None and out_dir.exists() and not out_dir.is_dir():
         raise UsageError(f"--out {args.out}: not a directory")
@@ -1201,7 +1214,7 @@ def cmd_commission(s: Session) -> int:
                 "" if args.x_min is not None and args.x_max is not None
                 else f" (node {node.node}'s safety.x_min_cm..x_max_cm where not given)")
     task = Task(w1_cm=args.w1, t_u_s=args.t_u, x_min_cm=x_min, x_max_cm=x_max, x_start_cm=args.x_start,
-                speed_cm_s=args.speed)
+                speed_cm_s=args.speed, mean_speed_cm_s=args.mean_speed, noise_limit=args.noise_limit)
     bar = commission_report.ProgressBar(sys.stderr) if not args.quiet and sys.stderr.isatty() else None
     run = commission.Commissioning(node, task, progress=bar.update if bar else None, timeout_s=max(args.timeout, 1.0))
     try:

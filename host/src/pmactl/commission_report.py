@@ -12,7 +12,7 @@ from typing import IO, TYPE_CHECKING
 import numpy as np
 
 from . import paramfile
-from .commission_rules import GM_MIN, PM_MIN_DEG
+from .commission_rules import CHATTER_WARN_PER_NEED, GM_MIN, PM_MIN_DEG
 from .protocol import Protocol
 
 if TYPE_CHECKING:
@@ -59,6 +59,9 @@ def text(r: Result) -> list[str]:
         f"{f['with_observer_phase_margin_deg']:.0f} deg, gain margin {f['with_observer_gain_margin']:.1f}, "
         f"delay margin {1000 * f['with_observer_delay_margin_s']:.0f} ms (the rule keeps "
         f"{PM_MIN_DEG:g} deg and {GM_MIN:g})",
+        f"the sensor's noise through the law moves the input {f['noise_input_rate_u_per_s']:.1f} units/s "
+        f"(mean |du/dt|), the reference needs {f['need_input_rate_u_per_s']:.1f}"
+        + _noise_bound(f),
         f"MFAC: lambda {d.params['mfac.lambda']:g}, integral loop gain {f['mfac_k_loop_per_s']:.2f} 1/s at phi = g; "
         f"phase margin {f['mfac_phase_margin_deg']:.0f} deg, gain margin {f['mfac_gain_margin']:.1f}, "
         f"delay margin {1000 * f['mfac_delay_margin_s']:.0f} ms",
@@ -83,6 +86,19 @@ def _early_lag(f: dict[str, float]) -> str:
     if f["tau_s"] >= f["tau_fit_s"]:
         return ""
     return f" (the early parts' lag; the fits, stretched by a slow tail, say {1000 * f['tau_fit_s']:.1f} ms)"
+
+
+def _noise_bound(f: dict[str, float]) -> str:
+    """What the sensor's noise does to the input against the need, and the bound the user set
+    (figures' noise_limit; 0: none)."""
+    noise, need, limit = f["noise_input_rate_u_per_s"], f["need_input_rate_u_per_s"], f["noise_limit"]
+    if need <= 0:
+        return " (a set-point task: nothing to weigh it against)"
+    if limit > 0:
+        held = "within" if noise <= limit * need else "above even at the slowest observer the margins allow:"
+        return f" ({noise / need:.2f}x; --noise-limit {limit:g}: {held} it)"
+    loud = " (expect the valve to chatter: see the warning)" if noise > CHATTER_WARN_PER_NEED * need else ""
+    return f" ({noise / need:.2f}x; no --noise-limit){loud}"
 
 
 def write(r: Result, out: Path, proto: Protocol, node: int) -> list[Path]:

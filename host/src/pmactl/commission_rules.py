@@ -51,6 +51,17 @@ SPEEDUP_MAX = 5.0            # tau_c >= tau / 5: the closed loop at most 5x fast
 # is at most 2 atan(1 / FC_PER_CROSSOVER): 14 deg here, 28 deg at 4x (docs/commissioning.md, "The rules")
 FC_PER_CROSSOVER = 8.0
 FC_MIN_HZ, FC_MAX_HZ = 2.0, 50.0
+# The sensor's noise through the law as built (law_noise_rate) moves the input; where it moves it
+# more than CHATTER_WARN_PER_NEED times the rate the task's reference needs (|ppc.ref_ff| x the
+# reference's mean speed), the report warns that the valve will chatter. The user may bound it
+# (Task.noise_limit, `pmactl commission --noise-limit K`): the observer's bandwidth then comes down
+# in steps of FC_NOISE_STEP, and with it the loop the margins allow, until the noise moves the input
+# at most K times the need. That buys a quieter valve with accuracy (docs/commissioning.md, "A
+# quieter valve"), so it is the user's choice, not a default. The input's total variation is about
+# the noise's and the need's in quadrature, the need's own part 1.2-2 times the need (the lag, the
+# hysteresis), and this estimate of the need 0.75-1.45 times the rig's.
+CHATTER_WARN_PER_NEED = 2.0
+FC_NOISE_STEP = 0.9
 FF_PER_KP = 30.0             # the feedforward integrator's gain k_ff in units of K_p
 W2_PER_A = 5.0               # lambda2's barrier at 5 a: theta = a tan(pi r / 2) reaches it at r = 0.87
 NOISE_SIGMAS_IN_W1 = 6.0     # w1 must hold 6 standard deviations of the position noise
@@ -184,6 +195,12 @@ class Task:
     x_max_cm: float
     x_start_cm: float | None = None   # where the reference starts (default: the band's middle)
     speed_cm_s: float = 0.0           # the reference's largest speed (0: a set-point task)
+    # the reference's mean speed |dx_r/dt| [cm/s] (None: a sine's, 2 / pi of speed_cm_s; 0: the
+    # noise is not weighed against it)
+    mean_speed_cm_s: float | None = None
+    # the sensor's noise may move the input at most this many times the rate the reference needs
+    # (None: no bound, the observer as fast as the margins want; CHATTER_WARN_PER_NEED)
+    noise_limit: float | None = None
     x_ref_min_cm: float | None = None  # the range the reference spans (default: the band less w1)
     x_ref_max_cm: float | None = None
 
@@ -237,6 +254,31 @@ def law_margins(k_v: float, k_p: float, k_ff: float, fc_hz: float, gain: float, 
     h_v = s * wo * wo / (s + wo) ** 2
     law = k_v * (1.0 + k_ff / s) * (k_p * h_x + h_v)
     return _margins(law * gain * np.exp(-theta_s * s) / (tau_s * s + 1.0))
+
+
+def law_noise_rate(k_v: float, k_p: float, k_ff: float, fc_hz: float, period_s: float, noise_cm: float) -> float:
+    """The mean |du/dt| [input units per s] that white position noise of standard deviation
+    noise_cm [cm] puts on the law's input u, ticked at period_s: the firmware's tracking observer
+    (pma/velest.h: both poles at exp(-2 pi fc T)) feeding the law's small-signal form with the
+    options commissioning sets (law_margins: u_law = K_v (K_p x_hat + v_hat), u = u_law plus its
+    integral at k_ff). With h the impulse response from x to u, a tick's change of u has the
+    standard deviation noise_cm ||h_k - h_{k-1}||, and a Gaussian's mean magnitude is sqrt(2 / pi)
+    of that. Units as law_margins'."""
+    p = math.exp(-2.0 * math.pi * fc_hz * period_s)
+    ga, gb = 1.0 - p * p, (1.0 - p) ** 2
+    # until the observer's response has decayed (p^n below 1e-9; the integral's part decays with it)
+    n = int(math.ceil(30.0 / (1.0 - p))) + 8
+    x_hat = v_hat = u_ff = 0.0
+    u = np.empty(n)
+    for k in range(n):
+        r = (1.0 if k == 0 else 0.0) - (x_hat + period_s * v_hat)
+        x_hat += period_s * v_hat + ga * r
+        v_hat += gb / period_s * r
+        u_law = k_v * (k_p * x_hat + v_hat)
+        u_ff += k_ff * period_s * u_law
+        u[k] = u_law + u_ff
+    du = np.diff(u, prepend=0.0)
+    return math.sqrt(2.0 / math.pi) * noise_cm * float(np.sqrt(np.sum(du * du))) / period_s
 
 
 def _margins(loop: np.ndarray) -> dict[str, float]:
@@ -369,17 +411,23 @@ def _keeps_margins(margins: dict[str, float]) -> bool:
 def _tightest_shape(gain: float, tau: float, theta_eff: float,
                     period_s: float) -> tuple[_Shape, dict[str, float], float]:
     """The observer's bandwidth (_observer_hz of the tightest loop the rule allows, tau_c =
-    TAU_C_PER_THETA_MIN theta_eff: what the sensor's noise pays for) and the loop with the
-    smallest tau_c / theta_eff in TAU_C_PER_THETA_MIN..MAX whose margins as built, with that
-    observer, keep PM_MIN_DEG and GM_MIN (bisection: they grow as tau_c does); the most robust
-    (TAU_C_PER_THETA_MAX) where none does. Returns the shape, its margins as built and fc [Hz]."""
+    TAU_C_PER_THETA_MIN theta_eff) and _tightest_at that bandwidth. Returns the shape, its margins
+    as built and fc [Hz]."""
     fc_hz = _observer_hz(_shape(gain, tau, theta_eff, TAU_C_PER_THETA_MIN), theta_eff, period_s)
+    return (*_tightest_at(gain, tau, theta_eff, fc_hz), fc_hz)
+
+
+def _tightest_at(gain: float, tau: float, theta_eff: float, fc_hz: float) -> tuple[_Shape, dict[str, float]]:
+    """The loop with the smallest tau_c / theta_eff in TAU_C_PER_THETA_MIN..MAX whose margins as
+    built, with the observer at fc_hz, keep PM_MIN_DEG and GM_MIN (bisection: they grow as tau_c
+    does); the most robust (TAU_C_PER_THETA_MAX) where none does. The shape and its margins as
+    built."""
     tight = _shaped(gain, tau, theta_eff, fc_hz, TAU_C_PER_THETA_MIN)
     if _keeps_margins(tight[1]):
-        return (*tight, fc_hz)
+        return tight
     loose = _shaped(gain, tau, theta_eff, fc_hz, TAU_C_PER_THETA_MAX)
     if not _keeps_margins(loose[1]):
-        return (*loose, fc_hz)
+        return loose
     lo, hi = TAU_C_PER_THETA_MIN, TAU_C_PER_THETA_MAX
     for _ in range(12):          # to 0.1 % of the range
         mid = 0.5 * (lo + hi)
@@ -388,7 +436,32 @@ def _tightest_shape(gain: float, tau: float, theta_eff: float,
             hi, loose = mid, shaped
         else:
             lo = mid
-    return (*loose, fc_hz)
+    return loose
+
+
+def _noise_rate(shape: _Shape, fc_hz: float, period_s: float, noise_cm: float) -> float:
+    return law_noise_rate(shape.k_v, shape.k_p, FF_PER_KP * shape.k_p, fc_hz, period_s, noise_cm)
+
+
+def _quiet_shape(tightest: tuple[_Shape, dict[str, float], float], gain: float, tau: float, theta_eff: float,
+                 period_s: float, noise_cm: float, need_u_per_s: float,
+                 limit: float | None) -> tuple[_Shape, dict[str, float], float, float]:
+    """From the tightest shape (_tightest_shape), with a limit (Task.noise_limit; None: none) and
+    while the sensor's noise through that loop (law_noise_rate) moves the input more than limit x
+    need_u_per_s (the rate the task's reference needs; 0: no bound), the observer FC_NOISE_STEP
+    slower and _tightest_at it, down to FC_MIN_HZ but never to a bandwidth at which no loop keeps
+    the margins (the noise does not buy back stability). Returns the shape, its margins as built,
+    fc [Hz] and the noise's rate [input units per s]."""
+    shape, margins, fc_hz = tightest
+    rate = _noise_rate(shape, fc_hz, period_s, noise_cm)
+    while limit is not None and need_u_per_s > 0 and rate > limit * need_u_per_s and fc_hz > FC_MIN_HZ:
+        fc_next = max(FC_NOISE_STEP * fc_hz, FC_MIN_HZ)
+        shape_next, margins_next = _tightest_at(gain, tau, theta_eff, fc_next)
+        if _keeps_margins(margins) and not _keeps_margins(margins_next):
+            break
+        shape, margins, fc_hz = shape_next, margins_next, fc_next
+        rate = _noise_rate(shape, fc_hz, period_s, noise_cm)
+    return shape, margins, fc_hz, rate
 
 
 def _ref_span(task: Task, reach_lo: float, reach_hi: float) -> tuple[float, float]:
@@ -424,6 +497,8 @@ def derive(m: Measured, task: Task) -> Derivation:
         raise CommissionError("no step response")
     if task.w1_cm <= 0 or task.t_u_s <= 0 or task.x_min_cm >= task.x_max_cm:
         raise CommissionError("the task needs w1 > 0, t_u > 0 and x_min < x_max")
+    if task.noise_limit is not None and not (math.isfinite(task.noise_limit) and task.noise_limit > 0):
+        raise CommissionError(f"the noise limit {task.noise_limit} must be a number above 0")
     lo, hi = m.static_map.stroke_cm()
     band_lo, band_hi = task.x_min_cm + task.w1_cm, task.x_max_cm - task.w1_cm
     if band_hi <= lo or band_lo >= hi:
@@ -474,31 +549,41 @@ def derive(m: Measured, task: Task) -> Derivation:
     theta_move = float(np.median(moves)) if moves else 0.0
     theta = max(theta_fit, theta_move)
     theta_eff = theta + m.period_s             # one sample of the loop's own delay
-    # the tightest tau_c that keeps the margins. Those that decide are the loop's as built, with the
-    # velocity observer in it (its lag at the crossover costs about 14 deg and a third of the gain
-    # margin): shaped on the PID's margins alone, every loop kept about 35 deg and 1.5 as built,
-    # and on mas10-itv2050 with a valve that waits 45 / 80 ms (fill / exhaust) the law hunted at
-    # 4 Hz and lost the guarantee (docs/commissioning.md, "The rules")
-    shape, with_observer, fc_hz = _tightest_shape(loop_gain, tau, theta_eff, m.period_s)
-    if not _keeps_margins(with_observer):
-        warnings.append(f"no loop keeps a phase margin of {PM_MIN_DEG:g} deg and a gain margin of {GM_MIN:g} on the "
-                        "measured lag: the most robust one is used (see its margins)")
-    tau_c, kc, tau_i, ki, r, k_p, k_v, margins = (shape.tau_c, shape.kc, shape.tau_i, shape.ki, FF_PER_KP,
-                                                 shape.k_p, shape.k_v, shape.margins)
-    a = 2.0 * task.w1_cm * k_p / math.pi
-    w2 = W2_PER_A * a
-    c = 2.0 * w2 * w2 * k_v / math.pi
 
     def u_of(p_kpa: float) -> float:
         return polarity * (p_kpa - p0) / m.kpa_per_u
-    u_lo, u_hi = sorted((u_of(m.p_min_kpa), u_of(m.p_max_kpa)))
-    u_start = u_of(m.static_map.hold_kpa(x_start))
-    mfac = mfac_gains(gain, tau, theta_eff, m.period_s, ki * m.period_s)
     # the reference feedforward: the static map's slope over the reachable band (the input per cm
     # that holds the muscle a cm further, a least-squares line through the holding inputs), taken
     # tau + theta ahead for the lag and dead time of the step responses
     xs = np.linspace(*_ref_span(task, reach_lo, reach_hi), 9)
     ref_ff = float(np.polyfit(xs, [u_of(m.static_map.hold_kpa(x)) for x in xs], 1)[0])
+    # the input's mean rate that the reference needs, against which the sensor's noise through the
+    # law is weighed (CHATTER_WARN_PER_NEED, Task.noise_limit)
+    mean_speed = 2.0 / math.pi * task.speed_cm_s if task.mean_speed_cm_s is None else task.mean_speed_cm_s
+    need_rate = abs(ref_ff) * mean_speed
+    # the tightest tau_c that keeps the margins. Those that decide are the loop's as built, with the
+    # velocity observer in it (its lag at the crossover costs about 14 deg and a third of the gain
+    # margin): shaped on the PID's margins alone, every loop kept about 35 deg and 1.5 as built,
+    # and on mas10-itv2050 with a valve that waits 45 / 80 ms (fill / exhaust) the law hunted at
+    # 4 Hz and lost the guarantee (docs/commissioning.md, "The rules"). The observer as fast as
+    # those margins want, unless the user bounds what the sensor's noise through it may move the
+    # input (Task.noise_limit)
+    tightest = _tightest_shape(loop_gain, tau, theta_eff, m.period_s)
+    shape, with_observer, fc_hz, noise_rate = _quiet_shape(tightest, loop_gain, tau, theta_eff, m.period_s,
+                                                          m.noise_cm, need_rate, task.noise_limit)
+    if not _keeps_margins(with_observer):
+        warnings.append(f"no loop keeps a phase margin of {PM_MIN_DEG:g} deg and a gain margin of {GM_MIN:g} on the "
+                        "measured lag: the most robust one is used (see its margins)")
+    tau_c, kc, tau_i, r, k_p, k_v, margins = (shape.tau_c, shape.kc, shape.tau_i, FF_PER_KP,
+                                             shape.k_p, shape.k_v, shape.margins)
+    a = 2.0 * task.w1_cm * k_p / math.pi
+    w2 = W2_PER_A * a
+    c = 2.0 * w2 * w2 * k_v / math.pi
+    u_lo, u_hi = sorted((u_of(m.p_min_kpa), u_of(m.p_max_kpa)))
+    u_start = u_of(m.static_map.hold_kpa(x_start))
+    # MFAC's first steps at the integral gain of the tightest loop: the noise limit is the paper's
+    # law's observer's, and MFAC has none
+    mfac = mfac_gains(gain, tau, theta_eff, m.period_s, tightest[0].ki * m.period_s)
     ref_ff_lead = tau + theta_eff
     hyst_ff, hyst_cm, hyst_kpa = _hysteresis_ff(m, [float(x) for x in xs])
 
@@ -515,6 +600,14 @@ def derive(m: Measured, task: Task) -> Derivation:
     if task.speed_cm_s > v_max:
         warnings.append(f"the reference's speed {task.speed_cm_s:g} cm/s exceeds {v_max:.2f} cm/s: expect |e| "
                         "near w1 and a loss of the guarantee (the fallback to MFAC takes over)")
+    warn_at = CHATTER_WARN_PER_NEED if task.noise_limit is None else task.noise_limit
+    if need_rate > 0 and noise_rate > warn_at * need_rate:
+        warnings.append(f"the sensor's noise ({m.noise_cm:.5f} cm) moves the input {noise_rate:.1f} units/s "
+                        f"with the observer at {fc_hz:.3g} Hz, over {warn_at:g}x what the reference needs "
+                        f"({need_rate:.1f} units/s): expect the valve to chatter; "
+                        + ("--noise-limit bounds it, at some accuracy, or " if task.noise_limit is None
+                           else "that is already the slowest observer the margins allow; ")
+                        + "a finer or quieter sensor")
     if not mfac.margins_kept:
         warnings.append(f"MFAC's integral loop keeps no phase margin of {PM_MIN_DEG:g} deg and gain margin of "
                         f"{GM_MIN:g} on the measured lag (its margins are printed): expect it to hunt")
@@ -562,6 +655,8 @@ def derive(m: Measured, task: Task) -> Derivation:
                "with_observer_phase_margin_deg": with_observer["phase_margin_deg"],
                "with_observer_gain_margin": with_observer["gain_margin"],
                "with_observer_delay_margin_s": with_observer["delay_margin_s"],
+               "noise_input_rate_u_per_s": noise_rate, "need_input_rate_u_per_s": need_rate,
+               "noise_limit": 0.0 if task.noise_limit is None else task.noise_limit,
                "mfac_k_loop_per_s": mfac.k_loop_per_s,
                "mfac_phase_margin_deg": mfac.margins["phase_margin_deg"],
                "mfac_gain_margin": mfac.margins["gain_margin"],
