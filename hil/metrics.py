@@ -59,6 +59,11 @@ class LaneMetrics:
     chatter_ratio: float | None                 # tv_pressure_cmd / tv_pressure_needed (1 = no more motion than needed)
     constraint_violations_controlled: int = 0   # samples with the output active
     constraint_violations_safe_state: int = 0   # samples in the safe state (output inactive)
+    # the same ratio over what the reference needs on a hysteretic rig: the pressure on the branch
+    # its direction puts the muscle on, each reversal crossing the hysteresis without moving x
+    # (hil/summary.py hysteretic_pressure_for); equal to the above on a rig without hysteresis
+    tv_pressure_needed_hysteretic_kpa_per_s: float | None = None
+    chatter_ratio_hysteretic: float | None = None
     final_state: str = ""
     final_fault_code: str = ""
     extra: dict[str, Any] = field(default_factory=dict)
@@ -74,7 +79,9 @@ def lane_metrics(label: str, mode: str, t_s: np.ndarray, e_cm: np.ndarray, x_mea
                  windows: list[tuple[float, float]], band: tuple[float, float], t_u_s: float | None,
                  w1_cm: float | None, telem: dict[str, np.ndarray] | None,
                  p_needed_kpa: np.ndarray | None = None, t_needed_s: np.ndarray | None = None,
-                 output_active: np.ndarray | None = None) -> LaneMetrics:
+                 output_active: np.ndarray | None = None,
+                 p_needed_hysteretic_kpa: np.ndarray | None = None,
+                 t_needed_hysteretic_s: np.ndarray | None = None) -> LaneMetrics:
     lo, hi = band
     t_after = t_u_s if t_u_s is not None else (windows[0][0] if windows else 0.0)
     max_after = max_abs_from(t_s, e_cm, t_after)
@@ -102,6 +109,10 @@ def lane_metrics(label: str, mode: str, t_s: np.ndarray, e_cm: np.ndarray, x_mea
     if p_needed_kpa is not None and t_needed_s is not None and len(p_needed_kpa) > 1:
         tv_need = total_variation_per_s(t_needed_s, p_needed_kpa)
         chatter = tv_p / tv_need if tv_need > 1e-9 else None
+    tv_need_h = chatter_h = None
+    if p_needed_hysteretic_kpa is not None and t_needed_hysteretic_s is not None and len(p_needed_hysteretic_kpa) > 1:
+        tv_need_h = total_variation_per_s(t_needed_hysteretic_s, p_needed_hysteretic_kpa)
+        chatter_h = tv_p / tv_need_h if tv_need_h > 1e-9 else None
     return LaneMetrics(
         label=label, mode=mode, samples=int(len(t_s)),
         duration_s=float(t_s[-1] - t_s[0]) if len(t_s) else 0.0, windows=windows,
@@ -117,4 +128,5 @@ def lane_metrics(label: str, mode: str, t_s: np.ndarray, e_cm: np.ndarray, x_mea
         tv_u_per_s=tv_u, tv_pressure_cmd_kpa_per_s=tv_p, tv_pressure_needed_kpa_per_s=tv_need,
         chatter_ratio=chatter,
         constraint_violations_controlled=viol_controlled, constraint_violations_safe_state=viol_safe,
+        tv_pressure_needed_hysteretic_kpa_per_s=tv_need_h, chatter_ratio_hysteretic=chatter_h,
     )

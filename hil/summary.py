@@ -93,6 +93,7 @@ def summarise(sc: Scenario, lanes: list[LaneResult], *, quick: bool, duration_s:
     }
     band = sc.band_cm()
     needed = static_pressure_for(sc)
+    needed_hysteretic = hysteretic_pressure_for(sc)
     for lane in lanes:
         label = lane.ctrl.label
         summary["fault_code"][label] = lane.fault_code
@@ -133,12 +134,16 @@ def summarise(sc: Scenario, lanes: list[LaneResult], *, quick: bool, duration_s:
         sub = slice(None, None, max(1, round(0.01 / period_s)))
         p_need = needed(xr[sub])
         ok = np.isfinite(p_need)
+        p_need_h = needed_hysteretic(xr[sub])
+        ok_h = np.isfinite(p_need_h)
         m = lane_metrics(label, lane.ctrl.mode, t, e, x_meas[run], d["x_true_cm"][run], d["v_true_cm_s"][run],
                          d["p_cmd_kpa"][run], windows, band, sc.t_u_s(lane.ctrl),
                          sc.w1_cm(lane.ctrl) if lane.ctrl.mode == "PPC" else None,
                          telem if "t_s" in telem else None,
                          p_need[ok] if ok.sum() > 1 else None, t[sub][ok] if ok.sum() > 1 else None,
-                         output_active=d["output_active"][run])
+                         output_active=d["output_active"][run],
+                         p_needed_hysteretic_kpa=p_need_h[ok_h] if ok_h.sum() > 1 else None,
+                         t_needed_hysteretic_s=t[sub][ok_h] if ok_h.sum() > 1 else None)
         m.final_state, m.final_fault_code = lane.state, lane.fault_code
         info.update(m.to_dict())
         # the same windows on the rig's true position (the sensor's noise and quantisation left out)
@@ -222,6 +227,45 @@ def static_pressure_for(sc: Scenario) -> Callable[[np.ndarray], np.ndarray]:
     def f(xq: np.ndarray) -> np.ndarray:
         out: np.ndarray = np.interp(xq, x[order], p[order])
         out[(xq < x.min()) | (xq > x.max())] = math.nan
+        return out
+    return f
+
+
+def hysteretic_pressure_for(sc: Scenario) -> Callable[[np.ndarray], np.ndarray]:
+    """x_r [cm], samples in time order -> the steady pressure command [kPa] that holds each on
+    the branch the reference's direction puts the muscle on: the muscle's friction saturated
+    against the motion and the regulator's backlash taken up (the initial load; NaN where the
+    branch does not reach). At each reversal the command crosses the width of both loops
+    without moving x, motion that static_pressure_for's frictionless curve does not count.
+    The direction is that of the frictionless need (x_r's own, through the polarity), held
+    where x_r stands still."""
+    rig = Rig(sc.rig_params(), seed=sc.seed)
+    reg = rig.params.regulator
+    backlash_half_kpa = 0.5 * reg.hysteresis_frac_fs * reg.fs_kpa
+    p = np.linspace(45.0, reg.p_max_kpa, 1000)
+
+    def branch(friction: float) -> tuple[np.ndarray, np.ndarray]:
+        x = np.array([rig.static_x_cm(float(v), friction=friction) for v in p])
+        order = np.argsort(x)
+        return x[order], p[order]
+    rising, falling = branch(+1.0), branch(-1.0)
+    virgin = static_pressure_for(sc)
+
+    def f(xq: np.ndarray) -> np.ndarray:
+        step = np.nan_to_num(np.sign(np.diff(virgin(xq))))
+        moving = np.flatnonzero(step)
+        direction = np.ones(len(xq))
+        if len(moving):
+            # each sample takes the last nonzero step's sign up to it (the first one's before it)
+            last = np.maximum.accumulate(np.where(step != 0, np.arange(len(step)), -1))
+            held = np.where(last >= 0, step[np.maximum(last, 0)], step[moving[0]])
+            direction = np.concatenate([[held[0]], held])
+        up = np.interp(xq, *rising) + backlash_half_kpa
+        down = np.interp(xq, *falling) - backlash_half_kpa
+        out: np.ndarray = np.where(direction > 0, up, down)
+        outside_up = (xq < rising[0][0]) | (xq > rising[0][-1])
+        outside_down = (xq < falling[0][0]) | (xq > falling[0][-1])
+        out[np.where(direction > 0, outside_up, outside_down)] = math.nan
         return out
     return f
 

@@ -209,9 +209,11 @@ def run(args: list[str], json_path: Path) -> dict[str, Any]:
 
 def print_chatter(jobs: list[tuple[str, str, list[str]]], summaries: list[dict[str, Any]]) -> None:
     """Each run's chatter ratio (the pressure command's total variation over what the reference
-    needs, hil/metrics.py) for both lanes, and the velocity observer commissioning chose."""
-    print("\n| rig | task | chatter ppc | chatter mfac | vel.fc_hz | noise / need (commissioning) |")
-    print("|---|---|---|---|---|---|")
+    needs, hil/metrics.py) for both lanes, over the frictionless need (the acceptance's) and over
+    the need on the hysteresis' branches, and the velocity observer commissioning chose."""
+    print("\n| rig | task | chatter ppc | chatter mfac | on the branches: ppc | mfac | vel.fc_hz "
+          "| noise / need (commissioning) |")
+    print("|---|---|---|---|---|---|---|---|")
     for (label, task, _), s in zip(jobs, summaries):
         p, m = s["controllers"]["ppc"], s["controllers"]["mfac"]
         d = (s.get("commissioning") or {}).get("derivation", {})
@@ -220,6 +222,7 @@ def print_chatter(jobs: list[tuple[str, str, list[str]]], summaries: list[dict[s
         ratio = "-" if need <= 0 else f"{f['noise_input_rate_u_per_s'] / need:.2f}"
         fc = d.get("params", {}).get("vel.fc_hz")
         print(f"| {label} | {task} | {fmt([p['chatter_ratio']], 2)} | {fmt([m['chatter_ratio']], 2)} | "
+              f"{fmt([p.get('chatter_ratio_hysteretic')], 2)} | {fmt([m.get('chatter_ratio_hysteretic')], 2)} | "
               f"{'-' if fc is None else f'{fc:.2f}'} | {ratio} |")
 
 

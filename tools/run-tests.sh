@@ -168,7 +168,7 @@ fuzz_60s() { bash tools/fuzz.sh 60; }
 
 NO_CAN_TESTS=(tests/golden tests/protocol tests/tools hil/tests/test_rig.py hil/tests/test_rig_profiles.py
   hil/tests/test_scenarios.py hil/tests/test_offline.py hil/tests/test_metrics_names.py
-  hil/tests/test_param_rules.py hil/tests/test_summary_flags.py hil/tests/test_commission.py
+  hil/tests/test_param_rules.py hil/tests/test_summary_flags.py hil/tests/test_hysteretic_need.py hil/tests/test_commission.py
   hil/tests/test_acceptance_criteria.py)
 
 stage "set-up (tools/setup.sh)" bash tools/setup.sh
