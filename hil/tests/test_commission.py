@@ -309,6 +309,24 @@ def test_derive_says_what_the_task_cannot_have():
         derive(_measured(), Task(w1_cm=0.2, t_u_s=2.0, x_min_cm=-9.0, x_max_cm=-6.0))
 
 
+def test_a_t_u_shorter_than_the_armed_distance_over_the_loops_speed_is_said():
+    d = derive(_measured(), TASK)
+    f = d.figures
+    # ARM raises the pressure to p0: the armed muscle rests on the rising branch there
+    p0 = d.params["act.p0_kpa"]
+    up = _map()
+    assert f["x_armed_cm"] == pytest.approx(float(np.interp(p0, up.p_up_kpa, up.x_up_cm)), abs=1e-9)
+    travel = abs(-2.0 - f["x_armed_cm"]) / f["v_max_cm_s"]
+    assert f["t_u_travel_s"] == pytest.approx(travel, rel=1e-9)
+    assert not any("armed muscle" in w for w in d.warnings)          # TASK's t_u = 2 s is enough here
+    short = Task(w1_cm=0.2, t_u_s=0.5 * travel, x_min_cm=-3.0, x_max_cm=0.0, x_start_cm=-2.0)
+    said = [w for w in derive(_measured(), short).warnings if "armed muscle" in w]
+    assert len(said) == 1 and f"t_u >= {travel:.1f} s" in said[0]
+    # no start given: nothing to say about it
+    free = Task(w1_cm=0.2, t_u_s=0.001, x_min_cm=-3.0, x_max_cm=0.0)
+    assert not any("armed muscle" in w for w in derive(_measured(), free).warnings)
+
+
 def test_loop_margins_of_a_known_loop():
     # an integrator 10/s with a 0.05 s delay: crossover 10 rad/s, phase margin 90 - 28.6 deg
     m = loop_margins(0.0, 10.0, 0.0, 1.0, 1e-9, 0.05)

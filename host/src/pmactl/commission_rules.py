@@ -134,6 +134,12 @@ class StaticMap:
             raise CommissionError(f"x = {x_cm:.3f} cm lies outside the measured stroke {lo:.3f}..{hi:.3f} cm")
 
 
+def _interp_x(p: list[float], x: list[float], p_kpa: float) -> float:
+    """x at p on one branch (sorted by p; beyond its ends, its end)."""
+    order = np.argsort(p)
+    return float(np.interp(p_kpa, np.asarray(p, float)[order], np.asarray(x, float)[order]))
+
+
 def _interp_p(p: list[float], x: list[float], x_cm: float) -> float:
     """p at x on one branch (sorted by x; beyond its ends, its end)."""
     order = np.argsort(x)
@@ -614,6 +620,18 @@ def derive(m: Measured, task: Task) -> Derivation:
     if task.t_u_s < t_u_min:
         warnings.append(f"t_u = {task.t_u_s:g} s is shorter than 4 (tau_c + theta) = {t_u_min:.3f} s: the error may "
                         "not have entered the band by then")
+    # the large-signal side of t_u: ARM raises the pressure from vented to act.p0_kpa, so the armed
+    # muscle rests on the static map's rising branch at p0; the funnel then asks the loop to cover
+    # the distance to the reference's start within t_u, and it follows about v_max
+    x_armed = _interp_x(m.static_map.p_up_kpa, m.static_map.x_up_cm, p0)
+    e0 = math.nan if task.x_start_cm is None else abs(task.x_start_cm - x_armed)
+    t_u_travel = e0 / v_max if v_max > 0 else math.inf
+    if task.x_start_cm is not None and task.t_u_s < t_u_travel:
+        warnings.append(f"the armed muscle rests about {e0:.2f} cm from where the reference starts (the rising branch "
+                        f"at act.p0_kpa {p0:.0f} kPa: {x_armed:.3f} cm), and the loop follows about {v_max:.2f} cm/s: "
+                        f"t_u = {task.t_u_s:g} s asks for it faster; expect the guarantee to be lost in the transient "
+                        f"and MFAC to take over; ask t_u >= {t_u_travel:.1f} s (a floor: a slow valve's large "
+                        "steps may need more)")
     hold_hyst = m.static_map.hysteresis_kpa(x_mid)
     params: dict[str, float | int] = {
         "act.polarity": polarity,
@@ -652,6 +670,7 @@ def derive(m: Measured, task: Task) -> Derivation:
                "hysteresis_kpa_over_ref": hyst_kpa,
                "kc_u_per_cm": kc, "tau_i_s": tau_i, "k_p_per_s": k_p, "k_v_u_per_cm_s": k_v, "w1_min_cm": w1_min,
                "v_max_cm_s": v_max, "t_u_min_s": t_u_min,
+               "x_armed_cm": x_armed, "t_u_travel_s": t_u_travel if math.isfinite(t_u_travel) else 0.0,
                "with_observer_phase_margin_deg": with_observer["phase_margin_deg"],
                "with_observer_gain_margin": with_observer["gain_margin"],
                "with_observer_delay_margin_s": with_observer["delay_margin_s"],
