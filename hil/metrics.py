@@ -74,6 +74,16 @@ class LaneMetrics:
         return d
 
 
+def _chatter(tv_p_kpa_per_s: float, t_needed_s: np.ndarray | None,
+             p_needed_kpa: np.ndarray | None) -> tuple[float | None, float | None]:
+    """(the needed pressure's total variation [kPa/s], the command's over it); None, None
+    without a need of two samples or more, a ratio of None where the need does not move."""
+    if p_needed_kpa is None or t_needed_s is None or len(p_needed_kpa) <= 1:
+        return None, None
+    tv_need = total_variation_per_s(t_needed_s, p_needed_kpa)
+    return tv_need, (tv_p_kpa_per_s / tv_need if tv_need > 1e-9 else None)
+
+
 def lane_metrics(label: str, mode: str, t_s: np.ndarray, e_cm: np.ndarray, x_meas_cm: np.ndarray,
                  x_true_cm: np.ndarray, v_true_cm_s: np.ndarray, p_cmd_kpa: np.ndarray,
                  windows: list[tuple[float, float]], band: tuple[float, float], t_u_s: float | None,
@@ -105,14 +115,8 @@ def lane_metrics(label: str, mode: str, t_s: np.ndarray, e_cm: np.ndarray, x_mea
         peak_u = float(np.max(np.abs(telem["u"])))
         tv_u = total_variation_per_s(tt, telem["u"])
     tv_p = total_variation_per_s(t_s, p_cmd_kpa)
-    tv_need = chatter = None
-    if p_needed_kpa is not None and t_needed_s is not None and len(p_needed_kpa) > 1:
-        tv_need = total_variation_per_s(t_needed_s, p_needed_kpa)
-        chatter = tv_p / tv_need if tv_need > 1e-9 else None
-    tv_need_h = chatter_h = None
-    if p_needed_hysteretic_kpa is not None and t_needed_hysteretic_s is not None and len(p_needed_hysteretic_kpa) > 1:
-        tv_need_h = total_variation_per_s(t_needed_hysteretic_s, p_needed_hysteretic_kpa)
-        chatter_h = tv_p / tv_need_h if tv_need_h > 1e-9 else None
+    tv_need, chatter = _chatter(tv_p, t_needed_s, p_needed_kpa)
+    tv_need_h, chatter_h = _chatter(tv_p, t_needed_hysteretic_s, p_needed_hysteretic_kpa)
     return LaneMetrics(
         label=label, mode=mode, samples=int(len(t_s)),
         duration_s=float(t_s[-1] - t_s[0]) if len(t_s) else 0.0, windows=windows,

@@ -93,7 +93,7 @@ def summarise(sc: Scenario, lanes: list[LaneResult], *, quick: bool, duration_s:
     }
     band = sc.band_cm()
     needed = static_pressure_for(sc)
-    needed_hysteretic = hysteretic_pressure_for(sc)
+    needed_hysteretic = hysteretic_pressure_for(sc, needed)
     for lane in lanes:
         label = lane.ctrl.label
         summary["fault_code"][label] = lane.fault_code
@@ -219,40 +219,41 @@ def reference_check(telem: dict[str, np.ndarray], steps: np.ndarray, xr_fn: Call
 def static_pressure_for(sc: Scenario) -> Callable[[np.ndarray], np.ndarray]:
     """x [cm] -> the steady pressure command [kPa] that holds it on the scenario's rig
     (static curve without friction, initial load; NaN where 0..p_max does not reach)."""
-    rig = Rig(sc.rig_params(), seed=sc.seed)
-    p = np.linspace(45.0, rig.params.regulator.p_max_kpa, 1000)
-    x = np.array([rig.static_x_cm(float(v)) for v in p])
-    order = np.argsort(x)
+    x, p = static_curve(Rig(sc.rig_params(), seed=sc.seed), friction=0.0)
 
     def f(xq: np.ndarray) -> np.ndarray:
-        out: np.ndarray = np.interp(xq, x[order], p[order])
-        out[(xq < x.min()) | (xq > x.max())] = math.nan
+        out: np.ndarray = np.interp(xq, x, p)
+        out[(xq < x[0]) | (xq > x[-1])] = math.nan
         return out
     return f
 
 
-def hysteretic_pressure_for(sc: Scenario) -> Callable[[np.ndarray], np.ndarray]:
+def static_curve(rig: Rig, friction: float) -> tuple[np.ndarray, np.ndarray]:
+    """The rig's static curve as (x [cm], pressure command [kPa]) sorted by x, over 45 kPa
+    (F(P) > 0: monotone) to p_max; friction as Rig.static_xs_mm's (0: none, +1/-1: a branch)."""
+    p = np.linspace(45.0, rig.params.regulator.p_max_kpa, 1000)
+    x = np.array([rig.static_x_cm(float(v), friction=friction) for v in p])
+    order = np.argsort(x)
+    return x[order], p[order]
+
+
+def hysteretic_pressure_for(sc: Scenario, virgin: Callable[[np.ndarray], np.ndarray] | None = None
+                            ) -> Callable[[np.ndarray], np.ndarray]:
     """x_r [cm], samples in time order -> the steady pressure command [kPa] that holds each on
     the branch the reference's direction puts the muscle on: the muscle's friction saturated
     against the motion and the regulator's backlash taken up (the initial load; NaN where the
     branch does not reach). At each reversal the command crosses the width of both loops
     without moving x, motion that static_pressure_for's frictionless curve does not count.
     The direction is that of the frictionless need (x_r's own, through the polarity), held
-    where x_r stands still."""
+    where x_r stands still (virgin: static_pressure_for(sc), if the caller has it already)."""
     rig = Rig(sc.rig_params(), seed=sc.seed)
     reg = rig.params.regulator
     backlash_half_kpa = 0.5 * reg.hysteresis_frac_fs * reg.fs_kpa
-    p = np.linspace(45.0, reg.p_max_kpa, 1000)
-
-    def branch(friction: float) -> tuple[np.ndarray, np.ndarray]:
-        x = np.array([rig.static_x_cm(float(v), friction=friction) for v in p])
-        order = np.argsort(x)
-        return x[order], p[order]
-    rising, falling = branch(+1.0), branch(-1.0)
-    virgin = static_pressure_for(sc)
+    rising, falling = static_curve(rig, +1.0), static_curve(rig, -1.0)
+    frictionless = virgin if virgin is not None else static_pressure_for(sc)
 
     def f(xq: np.ndarray) -> np.ndarray:
-        step = np.nan_to_num(np.sign(np.diff(virgin(xq))))
+        step = np.nan_to_num(np.sign(np.diff(frictionless(xq))))
         moving = np.flatnonzero(step)
         direction = np.ones(len(xq))
         if len(moving):
