@@ -163,7 +163,7 @@ vcan_hil() {
 # Stages of one process each that can share the two CPUs.
 no_can_pytest() { .venv/bin/python -m pytest -q "${NO_CAN_TESTS[@]}"; }
 pmactl_unit_tests() { .venv/bin/python -m pytest -q host/tests --ignore=host/tests/integration; }
-rig_variants() { .venv/bin/python -m pytest -q hil/tests/test_rig_variants.py; }
+rig_variants() { .venv/bin/python -m pytest -q hil/tests/test_rig_variants.py hil/tests/test_handover_start.py; }
 fuzz_60s() { bash tools/fuzz.sh 60; }
 
 NO_CAN_TESTS=(tests/golden tests/protocol tests/tools hil/tests/test_rig.py hil/tests/test_rig_profiles.py
@@ -194,7 +194,7 @@ side_by_side "pytest (no CAN)" no_can_pytest "pmactl unit tests (python-can virt
 stage "HIL acceptance offline (the paper's Cases 1-3, MFAC, PID, load change, constraint, faults; libpma_offline.so)" \
   .venv/bin/python -m pytest -q hil/tests/test_acceptance.py
 # the fuzz run is bounded by time: beside the variants it costs them a little CPU, not its minute
-side_by_side "rig variants offline (Case 3 on rigs the set was not tuned on: no fault, the guarantee or its flagged loss, at most MFAC's error)" \
+side_by_side "rig variants offline (Case 3 on rigs the set was not tuned on: no fault, the guarantee or its flagged loss, at most MFAC's error; the hand-over during the start)" \
   rig_variants "fuzz (libFuzzer on the CAN frame handler, ASan + UBSan, 60 s)" fuzz_60s
 # not side by side: its SIGINT test needs a shell whose background jobs may receive SIGINT (a
 # background lane starts with SIGINT ignored, and then so does everything it runs)

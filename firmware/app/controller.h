@@ -74,7 +74,7 @@ typedef struct pma_ctrl {
         pma_pid_f32_t pid;
     } c;
     /* PPC's guarantee monitor and fallback (docs/controllers.md, "When the guarantee is lost") */
-    pma_mfac_f32_t shadow;  /* MFAC, learning from the applied input while the PPC is in charge */
+    pma_mfac_f32_t shadow;  /* MFAC, in charge from the hand-over (ppc.fallback) */
     float play_z_cm;        /* ppc.ref_ff_hyst's play operator: its output z on x_r + lead x_r' [cm] */
 #endif
     uint8_t ppc_ref_vel;    /* option ppc.ref_vel: the law damps x' - x_r' */
@@ -182,10 +182,10 @@ int pma_ctrl_step_q16(pma_ctrl_t *s, pma_q16_t t_s, pma_q16_t x_cm, float openlo
  * safety.barrier_ticks consecutive ticks with a barrier clamp of the law (the run that faults
  * BARRIER with ppc.fallback NONE) and every clamped tick after it, is a lost tick. The first
  * one latches `lost` and records `lost_at_s`; every one counts in `lost_ticks`.
- * The hand-over to MFAC (`shadow`, the mfac.* gains, which has run beside the law from START
- * with its u(k-1) set to the input actually applied, so that its pseudo partial derivative
- * phi learns from the rig's real response and the hand-over is bumpless; the law is not
- * stepped again until STOP) comes
+ * The hand-over to MFAC (`shadow`, the mfac.* gains; the law is not stepped again until
+ * STOP) starts MFAC as it would start on its own at that point of the reference: from the
+ * holding input there by the static map (ppc.ff_init plus the reference feedforward) and
+ * from phi(1), not from the law's last input (pma_mfac_take_over_*). It comes
  *  - with ppc.fallback MFAC at the first lost tick;
  *  - with ppc.fallback WIDEN at the second widening of the position funnel within t_u of
  *    the one before (the law could not bring the error back inside its widened funnel: the

@@ -72,11 +72,11 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
     float out = 0.0f;
     switch (s->mode) {
     case PMA_CTRL_MODE_PPC: {
+        float u_ref = 0.0f;   /* the reference feedforward, inside the law's clamp */
         if (!s->fallback_active) {
             /* the options (controller.h) choose the law's inputs */
             const float x_law_cm = s->ppc_obs_pos ? s->vel.xh : x_cm;
             const float v_law_cm_s = s->ppc_ref_vel ? o->v_cm_s - o->xr_dot_cm_s : o->v_cm_s;
-            float u_ref = 0.0f;   /* the reference feedforward, inside the law's clamp */
             if (s->ref_ff_u_per_cm != 0.0f || s->hyst_u_per_cm != 0.0f) {
                 const float lead_cm = s->ref_ff_lead_s * o->xr_dot_cm_s;
                 const float xa_cm = o->xr_cm + lead_cm;   /* x_a: the reference taken lead ahead */
@@ -99,18 +99,24 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
             o->internal2 = s->c.ppc.out.lambda2_cm_s;
             o->barrier = (uint8_t)((o->flags & (PMA_PPC_FLAG_BARRIER1 | PMA_PPC_FLAG_BARRIER2)) != 0);
         }
+        const uint8_t was_fallback = s->fallback_active;
         if (pma_ctrl_monitor(s, t_s >= s->t_u_s && fabsf(o->e_cm) >= s->w1_cm, o->flags)) {
             pma_ctrl_monitor_lost(s, t_s, o->flags);
         }
-        /* the fallback's MFAC runs every tick: its law once it is in charge (from the tick of
-         * the hand-over), before that only its estimator, on the input the law applied */
+        /* MFAC takes over as it would start on its own at this point of the reference: from
+         * the holding input there by the static map (ppc.ff_init at the reference's start plus
+         * the reference feedforward) and phi(1). Not from the law's last output (the
+         * near-barrier input that lost the guarantee) nor its feedforward integrator (wound up
+         * by that input): docs/controllers.md, "When the guarantee is lost" */
+        if (s->fallback_active && !was_fallback) {
+            CHECK(pma_mfac_take_over_f32(&s->shadow, s->c.ppc.cfg.ff_init + u_ref));
+        }
+        /* the fallback's MFAC runs from the tick of the hand-over */
         if (s->fallback_active) {
             CHECK(pma_mfac_step_f32(&s->shadow, x_cm, next_reference(s, t_s), &out));
             o->flags = s->shadow.flags | PMA_CTRL_FLAG_FALLBACK;
             o->internal1 = s->shadow.phi;   /* TELEM_D as in mode MFAC */
             o->internal2 = s->shadow.u1;
-        } else if (s->fallback_mode != PMA_PPC_FALLBACK_NONE) {
-            CHECK(pma_mfac_learn_f32(&s->shadow, x_cm, out));
         }
         if (s->lost) o->flags |= PMA_CTRL_FLAG_GUARANTEE_LOST;
         break;

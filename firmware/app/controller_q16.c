@@ -141,11 +141,11 @@ int pma_ctrl_step_q16(pma_ctrl_t *s, pma_q16_t t, pma_q16_t x, float openloop_u,
     uint8_t barrier = 0;
     switch (s->mode) {
     case PMA_CTRL_MODE_PPC: {
+        pma_q16_t u_ref = 0;   /* the reference feedforward, inside the law's clamp */
         if (!s->fallback_active) {
             /* the options (controller.h) choose the law's inputs */
             const pma_q16_t x_law = s->ppc_obs_pos ? q32_to_q16(s->vel.xh_q32) : x;
             const pma_q16_t v_law = s->ppc_ref_vel ? pma_q16_ssub(o->v_cm_s, o->xr_dot_cm_s) : o->v_cm_s;
-            pma_q16_t u_ref = 0;   /* the reference feedforward, inside the law's clamp */
             if (s->q_ref_ff_u_per_cm != 0 || s->q_hyst_u_per_cm != 0) {
                 const pma_q16_t lead = pma_q16_smul(s->q_ref_ff_lead_s, o->xr_dot_cm_s);
                 const pma_q16_t xa = pma_q16_sadd(o->xr_cm, lead);
@@ -169,17 +169,19 @@ int pma_ctrl_step_q16(pma_ctrl_t *s, pma_q16_t t, pma_q16_t x, float openloop_u,
             o->internal2 = s->c.ppc.out.lambda2_cm_s;
             barrier = (uint8_t)((flags & (PMA_PPC_FLAG_BARRIER1 | PMA_PPC_FLAG_BARRIER2)) != 0);
         }
+        const uint8_t was_fallback = s->fallback_active;
         if (pma_ctrl_monitor(s, t >= s->q_t_u_s && q16_abs(o->e_cm) >= s->q_w1_cm, flags)) {
             pma_ctrl_monitor_lost(s, pma_q16_to_f32(t), flags);
         }
-        /* as controller_f32.c: the fallback's law once in charge, before that its estimator */
+        if (s->fallback_active && !was_fallback) {   /* as controller_f32.c */
+            CHECK(pma_mfac_take_over_q16(&s->shadow, pma_q16_sadd(s->c.ppc.ff_init, u_ref)));
+        }
+        /* as controller_f32.c: the fallback's MFAC from the tick of the hand-over */
         if (s->fallback_active) {
             CHECK(pma_mfac_step_q16(&s->shadow, x, next_reference(s, t), &out));
             flags = s->shadow.flags | PMA_CTRL_FLAG_FALLBACK;
             o->internal1 = phi_q16(s->shadow.phi_q24);   /* TELEM_D as in mode MFAC */
             o->internal2 = s->shadow.u1;
-        } else if (s->fallback_mode != PMA_PPC_FALLBACK_NONE) {
-            CHECK(pma_mfac_learn_q16(&s->shadow, x, out));
         }
         if (s->lost) flags |= PMA_CTRL_FLAG_GUARANTEE_LOST;
         break;

@@ -376,14 +376,17 @@ static void test_barrier(void)
 }
 
 /* The same task with ppc.fallback 1 (MFAC): no fault; the 100th consecutive clamped tick
- * (safety.barrier_ticks) loses the guarantee and hands the loop to MFAC, bumplessly (the
- * output of that tick is MFAC's from the input applied before); the loss is flagged in the
+ * (safety.barrier_ticks) loses the guarantee and hands the loop to MFAC, which starts from
+ * the holding input by the static map (ppc.ff_init here: no reference feedforward), not from
+ * the law's clamped input, and from phi(1); the loss is flagged in the
  * heartbeat and in TELEM_E, counted (GET_STATUS 8, and every tick after t_u with |e| >= w1),
  * and its time kept (GET_STATUS 9); the supervisor's limits still apply. */
 static void test_barrier_hands_over_to_mfac(void)
 {
     to_armed(0);
     set_u32(PMA_PARAM_PPC_FALLBACK, PMA_PPC_FALLBACK_MFAC);
+    const float ff_init = 37.5f;   /* the holding input at the reference's start, a Q16.16 value */
+    set_f32(PMA_PARAM_PPC_FF_INIT, ff_init);
     command_ok(PMA_CMD_START, 0, PMA_OK);
     TEST_ASSERT_EQUAL_HEX32(UINT32_MAX, status_value(PMA_STATUS_GUARANTEE_LOST_AT_MS));
     TEST_ASSERT_EQUAL_INT(0u, status_value(PMA_STATUS_GUARANTEE_LOST_TICKS));
@@ -408,8 +411,11 @@ static void test_barrier_hands_over_to_mfac(void)
             handover_tick = t;
             handover_t_s = o->t_s;
             TEST_ASSERT_TRUE(app.ctrl.lost && app.ctrl.fallback_active);
-            /* MFAC's first step continues from the input the law applied */
-            TEST_ASSERT_FLOAT_WITHIN((float)CTRL_LSB, u_before, CTRL_F32(app.ctrl.shadow.u2));
+            /* MFAC's first step starts from ff_init and phi(1), not from the law's input at
+             * its limit */
+            TEST_ASSERT_TRUE(u_before <= app.params.ctrl_u_min || u_before >= app.params.ctrl_u_max);
+            TEST_ASSERT_FLOAT_WITHIN((float)CTRL_LSB, ff_init, CTRL_F32(app.ctrl.shadow.u2));
+            TEST_ASSERT_TRUE(app.ctrl.shadow.flags & PMA_MFAC_FLAG_RESET);
         }
         TEST_ASSERT_TRUE(o->flags & PMA_CTRL_FLAG_FALLBACK);
         TEST_ASSERT_TRUE(o->flags & PMA_CTRL_FLAG_GUARANTEE_LOST);
@@ -445,7 +451,8 @@ static void test_barrier_hands_over_to_mfac(void)
  * (flagged, counted, its time kept); no BARRIER fault. The muscle jumps between both sides of
  * the reference, so the position funnel, shrinking back, meets the error again within t_u with
  * the input no longer at the limit it held: that second widening hands the loop to MFAC,
- * bumplessly. */
+ * which starts from the holding input by the static map (ppc.ff_init, 0 by default) and
+ * phi(1). */
 static void test_widening_instead_of_the_clamp(void)
 {
     to_running(0);
@@ -490,7 +497,9 @@ static void test_widening_instead_of_the_clamp(void)
             TEST_ASSERT_GREATER_OR_EQUAL(1u, widen1);
             TEST_ASSERT_GREATER_OR_EQUAL(400u, t);
             TEST_ASSERT_TRUE(o->t_s - widen1_t_s < t_u_s);
-            TEST_ASSERT_FLOAT_WITHIN((float)CTRL_LSB, u_before, CTRL_F32(app.ctrl.shadow.u2));
+            TEST_ASSERT_FLOAT_WITHIN((float)CTRL_LSB, app.params.ppc_ff_init, CTRL_F32(app.ctrl.shadow.u2));
+            TEST_ASSERT_TRUE(fabsf(u_before - app.params.ppc_ff_init) > 1.0f);   /* not the law's */
+            TEST_ASSERT_TRUE(app.ctrl.shadow.flags & PMA_MFAC_FLAG_RESET);
             handover_tick = t;
             continue;
         }

@@ -204,48 +204,51 @@ static void test_closed_loop_small_phi_fixed_matches_float(void)
     TEST_ASSERT_LESS_THAN_DOUBLE(1.2 * rf + 1e-4, rq);
 }
 
-/* learn = a step whose u(k) is then replaced by the input another controller applied:
- * the same phi, history and reset count in both arithmetics, over a run whose applied
- * input is not MFAC's own (a sine beside a slow ramp), with resets and without */
-static void test_learn_is_a_step_with_the_applied_input(void)
+/* take over: after MFAC's own steps on a plant whose gain is not phi(1) (phi moved off it), the
+ * next step starts from u_start (clamped to the limits) and from phi(1), in both arithmetics */
+static void test_take_over_starts_from_u_start_and_phi1(void)
 {
     pma_mfac_config_t c = paper();
-    pma_mfac_f32_t a, b;
-    pma_mfac_q16_t qa, qb;
-    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_init_f32(&a, &c));
-    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_init_f32(&b, &c));
-    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_init_q16(&qa, &c));
-    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_init_q16(&qb, &c));
-    double y = -2.0;
-    for (int k = 0; k < 2000; ++k) {
-        /* the applied input: held for 10 steps at a time, so du = 0 (a reset) in between */
-        const double u_app = (k / 10) % 7 == 0 ? 0.0 : 40.0 * sin(0.013 * (k / 10) * 10) + 0.01 * k;
+    pma_mfac_f32_t m;
+    pma_mfac_q16_t q;
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_init_f32(&m, &c));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_init_q16(&q, &c));
+    double y = -2.0, yq = -2.0;
+    for (int k = 0; k < 300; ++k) {   /* y = -2 + 0.02 u, a ramp reference */
         float u;
         pma_q16_t uq;
-        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_step_f32(&a, (float)y, (float)(y + 0.01), &u));
-        a.u1 = (float)u_app;
-        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_learn_f32(&b, (float)y, (float)u_app));
-        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_step_q16(&qa, Q16(y), Q16(y + 0.01), &uq));
-        qa.u1 = Q16(u_app);
-        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_learn_q16(&qb, Q16(y), Q16(u_app)));
-        TEST_ASSERT_EQUAL_FLOAT(a.phi, b.phi);
-        TEST_ASSERT_EQUAL_FLOAT(a.u2, b.u2);
-        TEST_ASSERT_EQUAL_FLOAT(a.y1, b.y1);
-        TEST_ASSERT_EQUAL_INT32(qa.phi_q24, qb.phi_q24);
-        TEST_ASSERT_EQUAL_INT32(qa.u1, qb.u1);
-        TEST_ASSERT_EQUAL_INT32(qa.u2, qb.u2);
-        TEST_ASSERT_EQUAL_UINT32(a.flags & PMA_MFAC_FLAG_RESET, b.flags);
-        TEST_ASSERT_EQUAL_UINT32(qa.flags & PMA_MFAC_FLAG_RESET, qb.flags);
-        y = 0.95 * y + 0.002 * u_app - 0.1;   /* a first-order plant driven by u_app */
+        const double ref = -2.0 + 0.002 * (k + 1);
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_step_f32(&m, (float)y, (float)ref, &u));
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_step_q16(&q, Q16(yq), Q16(ref), &uq));
+        y = -2.0 + 0.02 * u;
+        yq = -2.0 + 0.02 * (uq / 65536.0);
     }
-    TEST_ASSERT_EQUAL_UINT32(a.resets, b.resets);
-    TEST_ASSERT_EQUAL_UINT32(qa.resets, qb.resets);
-    TEST_ASSERT_TRUE(b.resets > 0 && b.resets < b.k);      /* both branches ran */
-    TEST_ASSERT_TRUE(qb.resets > 0 && qb.resets < qb.k);
-    TEST_ASSERT_EQUAL_INT(PMA_ERR_NOT_FINITE, pma_mfac_learn_f32(&b, NAN, 0.0f));
-    TEST_ASSERT_EQUAL_INT(PMA_ERR_NOT_FINITE, pma_mfac_learn_f32(&b, 0.0f, INFINITY));
-    TEST_ASSERT_EQUAL_UINT32(2000u, b.k);                  /* refused: state unchanged */
-    TEST_ASSERT_EQUAL_INT(PMA_ERR_NULL, pma_mfac_learn_q16(NULL, 0, 0));
+    const double y_end = y;
+    TEST_ASSERT_TRUE(fabsf(m.phi - c.phi1) > 0.1f);   /* learned: off phi(1) */
+    TEST_ASSERT_TRUE(fabs((q.phi_q24 - q.phi1_q24) / 16777216.0) > 0.1);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_take_over_f32(&m, 12.5f));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_take_over_q16(&q, Q16(12.5)));
+    float u;
+    pma_q16_t uq;
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_step_f32(&m, (float)y_end, (float)(y_end + 0.01), &u));
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_step_q16(&q, Q16(y_end), Q16(y_end + 0.01), &uq));
+    const double expect = 12.5 + 31.7 * 0.5 / (0.03 + 0.25) * 0.01;   /* phi(1) = 0.5 */
+    TEST_ASSERT_TRUE(m.flags & PMA_MFAC_FLAG_RESET);
+    TEST_ASSERT_TRUE(q.flags & PMA_MFAC_FLAG_RESET);
+    assert_near(m.phi, 0.5, 0.0);
+    assert_near(u, expect, 1e-4);
+    assert_near(uq / 65536.0, expect, 2e-3);
+    /* beyond the limits: clamped; non-finite: refused, state unchanged */
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_take_over_f32(&m, 1e6f));
+    assert_near(m.u1, c.u_max, 0.0);
+    assert_near(m.u2, c.u_max, 0.0);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_mfac_take_over_q16(&q, Q16(-1e4)));
+    TEST_ASSERT_EQUAL_INT32(Q16(c.u_min), q.u1);
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_NOT_FINITE, pma_mfac_take_over_f32(&m, NAN));
+    assert_near(m.u1, c.u_max, 0.0);
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_NULL, pma_mfac_take_over_q16(NULL, 0));
+    pma_mfac_f32_t idle = {0};
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_NOT_READY, pma_mfac_take_over_f32(&idle, 0.0f));
 }
 
 int main(void)
@@ -257,6 +260,6 @@ int main(void)
     RUN_TEST(test_invalid_config);
     RUN_TEST(test_closed_loop_fixed_matches_float);
     RUN_TEST(test_closed_loop_small_phi_fixed_matches_float);
-    RUN_TEST(test_learn_is_a_step_with_the_applied_input);
+    RUN_TEST(test_take_over_starts_from_u_start_and_phi1);
     return UNITY_END();
 }

@@ -106,13 +106,12 @@ int pma_mfac_step_f32(pma_mfac_f32_t *s, float y_cm, float yref_next_cm, float *
     return PMA_OK;
 }
 
-int pma_mfac_learn_f32(pma_mfac_f32_t *s, float y_cm, float u_applied)
+int pma_mfac_take_over_f32(pma_mfac_f32_t *s, float u_start)
 {
     if (s == NULL) return PMA_ERR_NULL;
     if (!s->ready) return PMA_ERR_NOT_READY;
-    if (!isfinite(y_cm) || !isfinite(u_applied)) return PMA_ERR_NOT_FINITE;
-    uint32_t flags = 0;
-    const float phi = estimate(s, y_cm, &flags);
-    commit(s, phi, u_applied, y_cm, flags);
+    if (!isfinite(u_start)) return PMA_ERR_NOT_FINITE;
+    const float u = u_start > s->cfg.u_max ? s->cfg.u_max : (u_start < s->cfg.u_min ? s->cfg.u_min : u_start);
+    s->u1 = s->u2 = u;
     return PMA_OK;
 }

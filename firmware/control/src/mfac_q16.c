@@ -147,12 +147,10 @@ int pma_mfac_step_q16(pma_mfac_q16_t *s, pma_q16_t y_cm, pma_q16_t yref_next_cm,
     return PMA_OK;
 }
 
-int pma_mfac_learn_q16(pma_mfac_q16_t *s, pma_q16_t y_cm, pma_q16_t u_applied)
+int pma_mfac_take_over_q16(pma_mfac_q16_t *s, pma_q16_t u_start)
 {
     if (s == NULL) return PMA_ERR_NULL;
     if (!s->ready) return PMA_ERR_NOT_READY;
-    uint32_t flags = 0;
-    const int32_t phi = estimate(s, y_cm, &flags);
-    commit(s, phi, u_applied, y_cm, flags);
+    s->u1 = s->u2 = pma_q16_clamp(u_start, s->u_min, s->u_max);
     return PMA_OK;
 }

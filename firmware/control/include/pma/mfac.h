@@ -54,13 +54,13 @@ void pma_mfac_reset_f32(pma_mfac_f32_t *s);
 /* y_cm: y(k); yref_next_cm: y*(k+1). Writes u(k). Non-finite input:
  * PMA_ERR_NOT_FINITE, state unchanged. */
 int pma_mfac_step_f32(pma_mfac_f32_t *s, float y_cm, float yref_next_cm, float *u);
-/* The estimator's step alone, for an MFAC that learns from the input another controller
- * applies (the paper's controller's fallback): phi(k) from y(k) as in the step, then u_applied
- * is recorded as u(k) in place of the law's own (PMA_MFAC_FLAG_RESET in flags as in the step,
- * no SAT flags: no law ran). The same state as a step whose u(k) was then replaced by
- * u_applied, without the law's quotient. Non-finite input: PMA_ERR_NOT_FINITE, state
- * unchanged. */
-int pma_mfac_learn_f32(pma_mfac_f32_t *s, float y_cm, float u_applied);
+/* MFAC takes charge from another controller (the paper's controller's fallback, at the
+ * hand-over): u_start, clamped to [u_min, u_max], becomes u(k-1) and u(k-2), so that the next
+ * step's law starts from it and its estimator, having seen no change of input, from phi(1) (the
+ * reset rule's du = 0): the MFAC that starts on its own, from u_start instead of u_init.
+ * (Not a phi learned beside the other controller: its input answered the output, which biases
+ * such an estimate.) Non-finite u_start: PMA_ERR_NOT_FINITE, state unchanged. */
+int pma_mfac_take_over_f32(pma_mfac_f32_t *s, float u_start);
 
 /* Fixed point: y and u in Q16.16; phi in Q8.24 (|phi| < 128: a pseudo partial derivative
  * in cm per input unit is small, 0.01 cm/kPa on a muscle, and Q16.16 would hold it to 3 or 4
@@ -78,6 +78,6 @@ typedef struct pma_mfac_q16 {
 int pma_mfac_init_q16(pma_mfac_q16_t *s, const pma_mfac_config_t *cfg);
 void pma_mfac_reset_q16(pma_mfac_q16_t *s);
 int pma_mfac_step_q16(pma_mfac_q16_t *s, pma_q16_t y_cm, pma_q16_t yref_next_cm, pma_q16_t *u);
-int pma_mfac_learn_q16(pma_mfac_q16_t *s, pma_q16_t y_cm, pma_q16_t u_applied);   /* as _f32 */
+int pma_mfac_take_over_q16(pma_mfac_q16_t *s, pma_q16_t u_start);                  /* as _f32 */
 
 #endif /* PMA_MFAC_H */
