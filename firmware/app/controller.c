@@ -76,7 +76,7 @@ int pma_ctrl_start(pma_ctrl_t *s, const pma_params_t *p, float period_s)
         s->w1_cm = c->w1_cm;
         s->t_u_s = c->t_u_s;
         s->barrier_ticks = p->safety_barrier_ticks;
-        /* the fallback's MFAC starts from the law's feedforward */
+        /* the fallback's MFAC: the mfac.* gains; its start is set at the hand-over (controller_*.c) */
         su.mfac = (pma_mfac_config_t){
             .eta = p->mfac_eta, .mu = p->mfac_mu, .rho = p->mfac_rho, .lambda = p->mfac_lambda,
             .eps = p->mfac_eps, .phi1 = p->mfac_phi1, .u_min = p->ctrl_u_min,
