@@ -60,7 +60,7 @@ typedef struct pma_ctrl {
         pma_mfac_q16_t mfac;
         pma_pid_q16_t pid;
     } c;
-    pma_mfac_q16_t shadow;  /* MFAC beside the PPC (fallback), as below */
+    pma_mfac_q16_t shadow;  /* MFAC, in charge from the hand-over (ppc.fallback), as below */
     pma_q16_t q_period_s, q_w1_cm, q_t_u_s;
     pma_q16_t q_ref_ff_u_per_cm, q_ref_ff_lead_s, q_xr0_cm;
     pma_q16_t q_hyst_u_per_cm, q_hyst_cm, q_play_z_cm;   /* ref_ff_hyst / ref_ff_hyst_cm, the play */

@@ -10,8 +10,7 @@ both commissioned on that rig, offline (the real firmware, libpma_offline.so).
 MFAC takes over from the static map's holding input at that point of the reference and from
 phi(1), as it starts on its own (docs/controllers.md, "When the guarantee is lost"): the node
 keeps tracking, no fault, about as well as the MFAC lane that ran from the start, inside w1
-from t_u on. (From the
-law's last input it hit the position limit: POSITION_LIMIT.)
+from t_u on. (From the law's last input it hit the position limit: POSITION_LIMIT.)
 
     .venv/bin/python -m pytest -q hil/tests/test_handover_start.py
 """

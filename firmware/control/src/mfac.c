@@ -111,7 +111,7 @@ int pma_mfac_take_over_f32(pma_mfac_f32_t *s, float u_start)
     if (s == NULL) return PMA_ERR_NULL;
     if (!s->ready) return PMA_ERR_NOT_READY;
     if (!isfinite(u_start)) return PMA_ERR_NOT_FINITE;
-    const float u = u_start > s->cfg.u_max ? s->cfg.u_max : (u_start < s->cfg.u_min ? s->cfg.u_min : u_start);
-    s->u1 = s->u2 = u;
+    const pma_mfac_config_t *c = &s->cfg;
+    s->u1 = s->u2 = u_start > c->u_max ? c->u_max : (u_start < c->u_min ? c->u_min : u_start);
     return PMA_OK;
 }
