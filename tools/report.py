@@ -216,8 +216,10 @@ def main() -> int:
     app = [p for p in APP_PRESETS if built(p)]
     if app:
         say("## Cost of a whole tick of the application (bench_app_tick)\n")
-        say("pma_app_step on the fake HAL (its own work is small: an ADC read about 30 instructions, "
-            "a DAC write about 40), RUNNING a HOLD with the sensor's counts alternating by one count "
+        say("pma_app_step on the fake HAL (about 300 instructions a tick of it are the fake's own "
+            "bookkeeping: its CAN controller's bus-state update on every call, its frame queues and "
+            "the benchmark's pops of the sent frames; `tools/profile_tick.py --by library` shows the "
+            "split), RUNNING a HOLD with the sensor's counts alternating by one count "
             "from tick to tick (a still sample would let the law's input settle and skip MFAC's "
             "divisions: the cheapest tick, not the one a budget needs): sample and scaling, "
             "estimator, controller, supervisor, actuator and DAC, heartbeat and telemetry at their "

@@ -19,15 +19,22 @@
 #include "generated/pma_proto.h"
 #include "generated/pma_proto_ties.h"
 
-/* Queues one of this node's frames; a frame the HAL does not take is counted. */
-static int send(pma_app_t *app, uint16_t base_id, uint8_t dlc, const uint8_t *data)
+/* One of this node's frames: the message's id and length, its data bytes zero, for the codec to
+ * pack in place. Stored member by member: on cores without unaligned word access a struct
+ * initialiser or assignment here is a library memset and memcpy on every telemetry frame. */
+static void frame_init(pma_can_frame_t *f, const pma_app_t *app, uint16_t base_id, uint8_t dlc)
 {
-    pma_can_frame_t f;
-    memset(&f, 0, sizeof f);
-    f.id = (uint16_t)(base_id | app->node_id);
-    f.dlc = dlc;
-    memcpy(f.data, data, dlc);
-    const int rc = pma_hal_can_send(&f);
+    f->id = (uint16_t)(base_id | app->node_id);
+    f->dlc = dlc;
+    f->data[0] = f->data[1] = f->data[2] = f->data[3] = 0;
+    f->data[4] = f->data[5] = f->data[6] = f->data[7] = 0;
+    _Static_assert(sizeof f->data == 8u, "every data byte above");
+}
+
+/* Queues f; a frame the HAL does not take is counted. */
+static int send(pma_app_t *app, const pma_can_frame_t *f)
+{
+    const int rc = pma_hal_can_send(f);
     if (rc != PMA_OK) ++app->counters.tx_failed;
     return rc;
 }
@@ -39,7 +46,12 @@ static int8_t result_code(int rc)
 
 int pma_app_send_frame(pma_app_t *app, uint16_t base_id, uint8_t dlc, const uint8_t *data)
 {
-    return send(app, base_id, dlc, data);
+    if (dlc > PMA_CAN_DLC_MAX) return PMA_ERR_RANGE;
+    if (dlc > 0 && data == NULL) return PMA_ERR_NULL;
+    pma_can_frame_t f;
+    frame_init(&f, app, base_id, dlc);
+    if (dlc > 0) memcpy(f.data, data, dlc);
+    return send(app, &f);
 }
 
 /* ------------------------------------------------------------------ replies -- */
@@ -49,9 +61,10 @@ static void send_ack(pma_app_t *app, uint8_t command, uint8_t arg, int rc)
     struct pma_proto_command_ack_t m = {
         .command = command, .arg = arg, .result = result_code(rc), .state = app->state,
     };
-    uint8_t d[8] = {0};
-    (void)pma_proto_command_ack_pack(d, &m, sizeof d);
-    (void)send(app, PMA_PROTO_COMMAND_ACK_FRAME_ID, PMA_PROTO_COMMAND_ACK_LENGTH, d);
+    pma_can_frame_t f;
+    frame_init(&f, app, PMA_PROTO_COMMAND_ACK_FRAME_ID, PMA_PROTO_COMMAND_ACK_LENGTH);
+    (void)pma_proto_command_ack_pack(f.data, &m, sizeof f.data);
+    (void)send(app, &f);
 }
 
 static void send_param_resp(pma_app_t *app, uint8_t op, uint16_t id, int rc, uint8_t type,
@@ -67,9 +80,10 @@ static void send_param_resp(pma_app_t *app, uint8_t op, uint16_t id, int rc, uin
     m.value_f32 = v.f32;
     m.value_u32 = v.u32;
     m.value_i32 = v.i32;
-    uint8_t d[8] = {0};
-    (void)pma_proto_param_resp_pack(d, &m, sizeof d);
-    (void)send(app, PMA_PROTO_PARAM_RESP_FRAME_ID, PMA_PROTO_PARAM_RESP_LENGTH, d);
+    pma_can_frame_t f;
+    frame_init(&f, app, PMA_PROTO_PARAM_RESP_FRAME_ID, PMA_PROTO_PARAM_RESP_LENGTH);
+    (void)pma_proto_param_resp_pack(f.data, &m, sizeof f.data);
+    (void)send(app, &f);
 }
 
 void pma_app_send_heartbeat(pma_app_t *app)
@@ -98,9 +112,10 @@ void pma_app_send_heartbeat(pma_app_t *app)
         .controller = (uint8_t)app->params.ctrl_mode, .reference = (uint8_t)app->params.ref_kind,
         .reset_cause = app->reset_cause, .counter = app->timing.heartbeat_counter++,
     };
-    uint8_t d[8] = {0};
-    (void)pma_proto_heartbeat_pack(d, &m, sizeof d);
-    (void)send(app, PMA_PROTO_HEARTBEAT_FRAME_ID, PMA_PROTO_HEARTBEAT_LENGTH, d);
+    pma_can_frame_t f;
+    frame_init(&f, app, PMA_PROTO_HEARTBEAT_FRAME_ID, PMA_PROTO_HEARTBEAT_LENGTH);
+    (void)pma_proto_heartbeat_pack(f.data, &m, sizeof f.data);
+    (void)send(app, &f);
 }
 
 int pma_app_send_actuator(pma_app_t *app)
@@ -109,46 +124,59 @@ int pma_app_send_actuator(pma_app_t *app)
         .seq = app->bridge.seq, .dac_counts = app->output.dac_counts, .sample = app->sensor.sample_status,
         .output_active = (uint8_t)(app->state == PMA_STATE_ARMED || app->state == PMA_STATE_RUNNING),
     };
-    uint8_t d[8] = {0};
-    (void)pma_proto_plant_actuator_pack(d, &m, sizeof d);
-    return send(app, PMA_PROTO_PLANT_ACTUATOR_FRAME_ID, PMA_PROTO_PLANT_ACTUATOR_LENGTH, d);
+    pma_can_frame_t f;
+    frame_init(&f, app, PMA_PROTO_PLANT_ACTUATOR_FRAME_ID, PMA_PROTO_PLANT_ACTUATOR_LENGTH);
+    (void)pma_proto_plant_actuator_pack(f.data, &m, sizeof f.data);
+    return send(app, &f);
 }
 
 void pma_app_send_telemetry(pma_app_t *app)
 {
     const pma_ctrl_out_t *o = pma_ctrl_out(&app->ctrl); /* Q16.16: converted here */
     const uint32_t mask = app->params.telem_mask;
-    uint8_t d[8];
     if (mask & PMA_TELEM_MASK_A) {
         /* the control time of this step: run_ticks was counted up after it */
         const uint64_t steps = app->timing.run_ticks > 0 ? app->timing.run_ticks - 1u : 0u;
-        const uint64_t ms = (steps * app->timing.period_us) / 1000u;
+        const uint64_t us = steps * app->timing.period_us;
+        /* the 32-bit division while the time fits (71 min): the same value, without the 64-bit
+         * one (a long library call on cores without a divide instruction) */
+        const uint64_t ms = (us >> 32) == 0u ? (uint32_t)us / 1000u : us / 1000u;
         struct pma_proto_telem_a_t m = {.time_ms = (uint32_t)ms, .x_cm = app->sensor.x_cm};
-        (void)pma_proto_telem_a_pack(d, &m, sizeof d);
-        (void)send(app, PMA_PROTO_TELEM_A_FRAME_ID, PMA_PROTO_TELEM_A_LENGTH, d);
+        pma_can_frame_t f;
+        frame_init(&f, app, PMA_PROTO_TELEM_A_FRAME_ID, PMA_PROTO_TELEM_A_LENGTH);
+        (void)pma_proto_telem_a_pack(f.data, &m, sizeof f.data);
+        (void)send(app, &f);
     }
     if (mask & PMA_TELEM_MASK_B) {
         struct pma_proto_telem_b_t m = {.xr_cm = o->xr_cm, .e_cm = o->e_cm};
-        (void)pma_proto_telem_b_pack(d, &m, sizeof d);
-        (void)send(app, PMA_PROTO_TELEM_B_FRAME_ID, PMA_PROTO_TELEM_B_LENGTH, d);
+        pma_can_frame_t f;
+        frame_init(&f, app, PMA_PROTO_TELEM_B_FRAME_ID, PMA_PROTO_TELEM_B_LENGTH);
+        (void)pma_proto_telem_b_pack(f.data, &m, sizeof f.data);
+        (void)send(app, &f);
     }
     if (mask & PMA_TELEM_MASK_C) {
         struct pma_proto_telem_c_t m = {.u = app->output.u, .v_cm_s = o->v_cm_s};
-        (void)pma_proto_telem_c_pack(d, &m, sizeof d);
-        (void)send(app, PMA_PROTO_TELEM_C_FRAME_ID, PMA_PROTO_TELEM_C_LENGTH, d);
+        pma_can_frame_t f;
+        frame_init(&f, app, PMA_PROTO_TELEM_C_FRAME_ID, PMA_PROTO_TELEM_C_LENGTH);
+        (void)pma_proto_telem_c_pack(f.data, &m, sizeof f.data);
+        (void)send(app, &f);
     }
     if (mask & PMA_TELEM_MASK_D) {
         struct pma_proto_telem_d_t m = {.internal1 = o->internal1, .internal2 = o->internal2};
-        (void)pma_proto_telem_d_pack(d, &m, sizeof d);
-        (void)send(app, PMA_PROTO_TELEM_D_FRAME_ID, PMA_PROTO_TELEM_D_LENGTH, d);
+        pma_can_frame_t f;
+        frame_init(&f, app, PMA_PROTO_TELEM_D_FRAME_ID, PMA_PROTO_TELEM_D_LENGTH);
+        (void)pma_proto_telem_d_pack(f.data, &m, sizeof f.data);
+        (void)send(app, &f);
     }
     if (mask & PMA_TELEM_MASK_E) {
         struct pma_proto_telem_e_t m = {
             .pressure_kpa = app->output.p_kpa, .ctrl_flags = (uint16_t)o->flags,
             .breaches = (uint16_t)(app->ctrl.breaches & 0xFFFFu), /* mod 2^16 (DBC) */
         };
-        (void)pma_proto_telem_e_pack(d, &m, sizeof d);
-        (void)send(app, PMA_PROTO_TELEM_E_FRAME_ID, PMA_PROTO_TELEM_E_LENGTH, d);
+        pma_can_frame_t f;
+        frame_init(&f, app, PMA_PROTO_TELEM_E_FRAME_ID, PMA_PROTO_TELEM_E_LENGTH);
+        (void)pma_proto_telem_e_pack(f.data, &m, sizeof f.data);
+        (void)send(app, &f);
     }
 }
 

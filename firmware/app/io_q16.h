@@ -52,6 +52,21 @@ typedef struct pma_scale_q {   /* x m 2^-s */
 /* x m 2^-s rounded (ties away from zero); |x| < 2^31 */
 static inline int64_t pma_scale_q_apply(pma_scale_q_t sc, int32_t x)
 {
+#if defined(__ARM_ARCH_6M__)
+    if (sc.s < 32u) {
+        /* the usual shifts (a factor of 2^-1 .. 2^30): the magnitudes' product rounded and
+         * shifted word by word, no 64-bit shift or negation of the product on the way (Thumb-1
+         * has neither); the same value as the general form below */
+        const uint32_t um = sc.m < 0 ? 0u - (uint32_t)sc.m : (uint32_t)sc.m;
+        const uint32_t ux = x < 0 ? 0u - (uint32_t)x : (uint32_t)x;
+        uint32_t hi;   /* < 2^30: |m| < 2^30, |x| <= 2^31 */
+        const uint32_t lo = pma_umul32_v6m(um, ux, &hi);
+        const uint32_t lo_r = lo + ((uint32_t)1 << (sc.s - 1u));
+        hi += lo_r < lo;   /* the rounding's carry */
+        const uint64_t r = ((uint64_t)(hi >> sc.s) << 32) | (hi << (32u - sc.s)) | (lo_r >> sc.s);
+        return ((sc.m < 0) != (x < 0)) ? -(int64_t)r : (int64_t)r;
+    }
+#endif
     return pma_rshift_round(pma_mul32(sc.m, x), sc.s);
 }
 
