@@ -34,11 +34,6 @@ pma_param_phase_t pma_app_phase(const pma_app_t *app)
     }
 }
 
-int pma_app_output_active(const pma_app_t *app)
-{
-    return app->state == PMA_STATE_ARMED || app->state == PMA_STATE_RUNNING;
-}
-
 void pma_app_raise_fault(pma_app_t *app, pma_fault_t fault)
 {
     if (app == NULL || fault == PMA_FAULT_NONE) return;
@@ -133,6 +128,7 @@ static void zero_output_u(pma_app_t *app)
     app->output.u = 0.0f;
 #if PMA_CTRL_Q16
     app->output.u_q16 = 0;
+    app->output.u_in_q16 = 0;
 #endif
 }
 
@@ -158,6 +154,9 @@ static void supervisor_limits(const pma_app_t *app, pma_supervisor_limits_t *lim
         .host_timeout_ticks = ms_to_ticks(p->safety_host_timeout_ms, p->sys_tick_hz),
         .barrier_ticks = p->safety_barrier_ticks,
     };
+#if PMA_CTRL_Q16
+    pma_supervisor_limits_q16(lim);
+#endif
 }
 
 static int cmd_arm(pma_app_t *app)
@@ -181,7 +180,7 @@ static int cmd_arm(pma_app_t *app)
     }
     pma_supervisor_limits_t lim;
     supervisor_limits(app, &lim);
-    if (!pma_f32_within(app->sensor.x_cm, lim.x_lo_cm, lim.x_hi_cm)) return PMA_ERR_RANGE;
+    if (!pma_f32_within(pma_app_position_cm(app), lim.x_lo_cm, lim.x_hi_cm)) return PMA_ERR_RANGE;
     app->limits = lim;
 #if PMA_CTRL_Q16
     pma_app_io_q16_arm(app);
@@ -280,9 +279,12 @@ void pma_app_core_tick(pma_app_t *app, uint32_t late_ticks)
         if (app->sensor.status == PMA_OK) {
             float u = 0.0f;
 #if PMA_CTRL_Q16
+            /* the output's float only where it is one (OPEN_LOOP), else when read */
+            const uint8_t in_q16 = (uint8_t)pma_ctrl_output_in_q16(&app->ctrl);
             ctrl_error = (uint8_t)(pma_ctrl_step_q16(&app->ctrl, app->timing.clock.t_s, app->sensor.x_q16,
                                                      app->params.ctrl_openloop_u, &app->output.u_q16,
-                                                     &u) != PMA_OK);
+                                                     in_q16 ? NULL : &u) != PMA_OK);
+            app->output.u_in_q16 = in_q16;
             pma_clock_q16_advance(&app->timing.clock);
 #else
             /* the same float either way; the 32-bit conversion is one instruction with an FPU
@@ -309,11 +311,19 @@ void pma_app_core_tick(pma_app_t *app, uint32_t late_ticks)
         .bus_off = bus_off,
         .sensor_status = app->sensor.status,
         .x_cm = app->sensor.x_cm,
+#if PMA_CTRL_Q16
+        .x_in_q16 = app->sensor.x_in_q16,   /* then x_q16 is checked, and x_cm is not read */
+        .x_q16 = app->sensor.x_q16,
+#endif
         .ticks_since_sample = pma_app_bridge_on(app) ? app->sensor.ticks_since_sample : 0u,
         .late_ticks = late_ticks,
         .ticks_since_host_heartbeat = app->timing.ticks_since_host_heartbeat,
         .controller_error = ctrl_error,
+#if PMA_CTRL_Q16
+        .u = app->output.u_in_q16 ? 0.0f : app->output.u,   /* a Q16.16 output is finite */
+#else
         .u = app->output.u,
+#endif
         /* the law's clamp run faults only without a fallback: with MFAC the run hands over in
          * the same tick, and WIDEN keeps the law in charge (docs/controllers.md) */
         .barrier_run = app->ctrl.fallback_mode == PMA_PPC_FALLBACK_NONE ? app->ctrl.barrier_run : 0u,

@@ -228,12 +228,16 @@ typedef struct pma_app_input_q16 {
 typedef struct pma_app_sensor {
     uint16_t raw_counts;
     int status;                    /* PMA_OK or the conversion's error */
-    float x_cm;
+    float x_cm;                    /* read it with pma_app_position_cm(): stale where x_in_q16 */
 #if PMA_CTRL_Q16
-    pma_q16_t x_q16;               /* x_cm in Q16.16: the controller slot's input */
+    pma_q16_t x_q16;               /* the position in Q16.16: the controller slot's input */
     pma_app_input_q16_t q16;
 #endif
     uint8_t sample_status;         /* pma_sample_status_t: how this tick's sample came */
+#if PMA_CTRL_Q16
+    uint8_t x_in_q16;              /* 1: the fixed-point stage made the sample, x_q16 is the
+                                      position and its float is made only when read */
+#endif
     uint32_t ticks_since_sample;   /* since the last new sample (saturates at UINT32_MAX) */
 } pma_app_sensor_t;
 
@@ -258,12 +262,18 @@ typedef struct pma_app_output_q16 {
 
 /* What the actuator is driven with. */
 typedef struct pma_app_output {
-    float u;                       /* the controller's output (its own units: kPa about p0) */
+    float u;                       /* the controller's output (its own units: kPa about p0);
+                                      read it with pma_app_output_u(): stale where u_in_q16 */
 #if PMA_CTRL_Q16
     pma_q16_t u_q16;               /* u in Q16.16, the slot's own number (always u's value) */
 #endif
-    float p_kpa;                   /* the pressure command */
+    float p_kpa;                   /* the pressure command; read it with pma_app_pressure_kpa():
+                                      stale where the fixed-point stage wrote it (q16.p_valid) */
     uint16_t dac_counts;           /* and its DAC code */
+#if PMA_CTRL_Q16
+    uint8_t u_in_q16;              /* 1: u_q16 is the output and its float is made only when
+                                      read (every mode but OPEN_LOOP, whose output is a float) */
+#endif
 #if PMA_CTRL_Q16
     pma_app_output_q16_t q16;
 #endif
@@ -354,6 +364,17 @@ const char *pma_app_state_name(int state);
  * leaves in PLANT_ACTUATOR frames instead of the ADC and DAC: forced on by
  * the platform (plat.plant_bridge, host build) or enabled by the parameter
  * sys.plant_bridge (board; settable only while the output is inactive). */
-int pma_app_bridge_on(const pma_app_t *app);
+static inline int pma_app_bridge_on(const pma_app_t *app)   /* inline: several times a tick */
+{
+    return app->plat.plant_bridge != 0 || app->params.sys_plant_bridge != 0;
+}
+
+/* This tick's position [cm], the controller's output [its unit] and the pressure command [kPa]
+ * in float. In the Q16.16 builds the fixed-point stages and the controller slot keep them in
+ * Q16.16 and these make the float (pma_q16_to_f32) when read, not in every tick: read them
+ * here, never from the fields. */
+float pma_app_position_cm(const pma_app_t *app);
+float pma_app_output_u(const pma_app_t *app);
+float pma_app_pressure_kpa(const pma_app_t *app);
 
 #endif /* PMA_APP_H */

@@ -15,7 +15,11 @@
 
 /* app.c: the state machine */
 pma_param_phase_t pma_app_phase(const pma_app_t *app);
-int pma_app_output_active(const pma_app_t *app);   /* ARMED or RUNNING */
+/* ARMED or RUNNING (inline: several times a tick) */
+static inline int pma_app_output_active(const pma_app_t *app)
+{
+    return app->state == PMA_STATE_ARMED || app->state == PMA_STATE_RUNNING;
+}
 int pma_app_load_params(pma_app_t *app);
 
 /* app_config.c: the configurations the parameters make, and their rules */
@@ -32,7 +36,16 @@ int pma_app_check_cross_params(pma_app_t *app);
 int pma_app_apply_timing(pma_app_t *app);
 
 /* app_io.c: the sample in, the command out */
-void pma_app_sync_bridge(pma_app_t *app);
+/* The bridge was switched (sys.plant_bridge by SET, LOAD or RESTORE_DEFAULTS,
+ * only possible with the output inactive): forget the other source's sample
+ * state, so that a sample from before the switch never counts as fresh. The check
+ * inline (every tick), the switch out of line. */
+void pma_app_bridge_switched(pma_app_t *app, uint8_t on);
+static inline void pma_app_sync_bridge(pma_app_t *app)
+{
+    const uint8_t on = (uint8_t)pma_app_bridge_on(app);
+    if (on != app->bridge.active) pma_app_bridge_switched(app, on);
+}
 void pma_app_acquire(pma_app_t *app);       /* this tick's position into app->sensor */
 void pma_app_write_output(pma_app_t *app);  /* app->output.u to the DAC or the bridge */
 #if PMA_CTRL_Q16

@@ -141,7 +141,7 @@ void pma_app_send_telemetry(pma_app_t *app)
         /* the 32-bit division while the time fits (71 min): the same value, without the 64-bit
          * one (a long library call on cores without a divide instruction) */
         const uint64_t ms = (us >> 32) == 0u ? (uint32_t)us / 1000u : us / 1000u;
-        struct pma_proto_telem_a_t m = {.time_ms = (uint32_t)ms, .x_cm = app->sensor.x_cm};
+        struct pma_proto_telem_a_t m = {.time_ms = (uint32_t)ms, .x_cm = pma_app_position_cm(app)};
         pma_can_frame_t f;
         frame_init(&f, app, PMA_PROTO_TELEM_A_FRAME_ID, PMA_PROTO_TELEM_A_LENGTH);
         (void)pma_proto_telem_a_pack(f.data, &m, sizeof f.data);
@@ -155,7 +155,7 @@ void pma_app_send_telemetry(pma_app_t *app)
         (void)send(app, &f);
     }
     if (mask & PMA_TELEM_MASK_C) {
-        struct pma_proto_telem_c_t m = {.u = app->output.u, .v_cm_s = o->v_cm_s};
+        struct pma_proto_telem_c_t m = {.u = pma_app_output_u(app), .v_cm_s = o->v_cm_s};
         pma_can_frame_t f;
         frame_init(&f, app, PMA_PROTO_TELEM_C_FRAME_ID, PMA_PROTO_TELEM_C_LENGTH);
         (void)pma_proto_telem_c_pack(f.data, &m, sizeof f.data);
@@ -170,7 +170,7 @@ void pma_app_send_telemetry(pma_app_t *app)
     }
     if (mask & PMA_TELEM_MASK_E) {
         struct pma_proto_telem_e_t m = {
-            .pressure_kpa = app->output.p_kpa, .ctrl_flags = (uint16_t)o->flags,
+            .pressure_kpa = pma_app_pressure_kpa(app), .ctrl_flags = (uint16_t)o->flags,
             .breaches = (uint16_t)(app->ctrl.breaches & 0xFFFFu), /* mod 2^16 (DBC) */
         };
         pma_can_frame_t f;
@@ -362,7 +362,7 @@ void pma_app_handle_frame(pma_app_t *app, const pma_can_frame_t *f)
     }
 }
 
-void pma_app_send_due(pma_app_t *app)
+void pma_app_send_marked(pma_app_t *app)
 {
     const uint8_t due = app->tx_due;
     app->tx_due = 0;

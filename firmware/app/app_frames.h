@@ -20,7 +20,11 @@ int pma_app_send_actuator(pma_app_t *app);
 /* Queues one of this node's frames (id = base_id + node id); counts one the HAL refuses. */
 int pma_app_send_frame(pma_app_t *app, uint16_t base_id, uint8_t dlc, const uint8_t *data);
 /* Sends what the core marked in app->tx_due (actuator, telemetry, heartbeat, in
- * that order) and clears it. */
-void pma_app_send_due(pma_app_t *app);
+ * that order) and clears it; inline where nothing is due (most of a tick's calls). */
+void pma_app_send_marked(pma_app_t *app);
+static inline void pma_app_send_due(pma_app_t *app)
+{
+    if (app->tx_due != 0u) pma_app_send_marked(app);
+}
 
 #endif /* PMA_APP_FRAMES_H */

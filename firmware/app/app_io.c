@@ -8,18 +8,8 @@
 #include "app_core.h"
 #include "generated/pma_proto.h"
 
-int pma_app_bridge_on(const pma_app_t *app)
+void pma_app_bridge_switched(pma_app_t *app, uint8_t on)
 {
-    return app->plat.plant_bridge != 0 || app->params.sys_plant_bridge != 0;
-}
-
-/* The bridge was switched (sys.plant_bridge by SET, LOAD or RESTORE_DEFAULTS,
- * only possible with the output inactive): forget the other source's sample
- * state, so that a sample from before the switch never counts as fresh. */
-void pma_app_sync_bridge(pma_app_t *app)
-{
-    const uint8_t on = (uint8_t)pma_app_bridge_on(app);
-    if (on == app->bridge.active) return;
     app->bridge.active = on;
     app->bridge.have = app->bridge.fresh = app->bridge.gap = 0;
     app->sensor.ticks_since_sample = 0;
@@ -76,7 +66,7 @@ static int scale_sample(pma_app_t *app)
         const int rc = pma_input_q16_cm(in, app->sensor.raw_counts, &x);
         if (rc == PMA_OK) {
             app->sensor.x_q16 = x;
-            app->sensor.x_cm = pma_q16_to_f32(x);
+            app->sensor.x_in_q16 = 1;   /* its float only when read: pma_app_position_cm */
         }
         return rc;
     }
@@ -89,6 +79,7 @@ static int scale_sample(pma_app_t *app)
         app->sensor.x_cm = x;
 #if PMA_CTRL_Q16
         app->sensor.x_q16 = pma_q16_from_f32(x);   /* saturated: the slot's range */
+        app->sensor.x_in_q16 = 0;
 #endif
     }
     return rc;
@@ -140,7 +131,40 @@ static const pma_output_q16_t *output_q16(pma_app_t *app)
     }
     return c->ok ? &c->stage : NULL;
 }
+
+/* The float functions take over p (the output went inactive, or the stage cannot represent
+ * the parameters, or the DAC failed): the stage's last p as the float they start from. */
+static void sync_pressure_f32(pma_app_t *app)
+{
+    pma_app_output_q16_t *c = &app->output.q16;
+    if (c->p_valid) app->output.p_kpa = pma_q16_to_f32(c->p_kpa);
+    c->p_valid = 0;
+}
 #endif
+
+float pma_app_position_cm(const pma_app_t *app)
+{
+#if PMA_CTRL_Q16
+    if (app->sensor.x_in_q16) return pma_q16_to_f32(app->sensor.x_q16);
+#endif
+    return app->sensor.x_cm;
+}
+
+float pma_app_output_u(const pma_app_t *app)
+{
+#if PMA_CTRL_Q16
+    if (app->output.u_in_q16) return pma_q16_to_f32(app->output.u_q16);
+#endif
+    return app->output.u;
+}
+
+float pma_app_pressure_kpa(const pma_app_t *app)
+{
+#if PMA_CTRL_Q16
+    if (app->output.q16.p_valid) return pma_q16_to_f32(app->output.q16.p_kpa);
+#endif
+    return app->output.p_kpa;
+}
 
 void pma_app_write_output(pma_app_t *app)
 {
@@ -157,13 +181,12 @@ void pma_app_write_output(pma_app_t *app)
             const pma_q16_t p_prev = c->p_valid ? c->p_kpa : pma_q16_from_f32(app->output.p_kpa);
             const pma_q16_t p = pma_output_q16_kpa(q, app->output.u_q16, p_prev);
             c->p_kpa = p;
-            c->p_valid = 1;
-            app->output.p_kpa = pma_q16_to_f32(p);
+            c->p_valid = 1;   /* output.p_kpa's float only when read: pma_app_pressure_kpa */
             app->output.dac_counts = pma_output_q16_counts(q, p);
             written = 1;
         }
     }
-    if (!written) c->p_valid = 0;   /* the float functions write p below */
+    if (!written) sync_pressure_f32(app);   /* the float functions take p(k-1) and write p below */
 #endif
     pma_actuator_config_t ac;
     pma_dac_scaling_t ds;
@@ -171,7 +194,7 @@ void pma_app_write_output(pma_app_t *app)
         pma_app_actuator_config(&app->params, &ac);
         pma_app_dac_scaling(&app->params, &ds);
         if (pma_app_output_active(app)) {
-            app->output.p_kpa = pma_actuator_active_kpa(&ac, app->output.u, app->output.p_kpa,
+            app->output.p_kpa = pma_actuator_active_kpa(&ac, pma_app_output_u(app), app->output.p_kpa,
                                                         app->timing.period_s);
         } else {
             app->output.p_kpa = pma_actuator_safe_kpa(&ac, app->output.p_kpa);
@@ -198,10 +221,10 @@ void pma_app_write_output(pma_app_t *app)
         pma_app_raise_fault(app, PMA_FAULT_OUTPUT);
         pma_app_actuator_config(&app->params, &ac);
         pma_app_dac_scaling(&app->params, &ds);
-        app->output.p_kpa = pma_actuator_safe_kpa(&ac, app->output.p_kpa);
 #if PMA_CTRL_Q16
-        app->output.q16.p_valid = 0;
+        sync_pressure_f32(app);
 #endif
+        app->output.p_kpa = pma_actuator_safe_kpa(&ac, app->output.p_kpa);
         uint16_t counts = 0;
         if (pma_dac_kpa_to_counts(&ds, app->output.p_kpa, &counts) != PMA_OK ||
             pma_hal_dac_write(counts) != PMA_OK) {

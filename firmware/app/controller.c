@@ -107,21 +107,6 @@ int pma_ctrl_start(pma_ctrl_t *s, const pma_params_t *p, float period_s)
     return pma_ctrl_init_arith(s, &su);
 }
 
-/* the law's clamp has lasted ctrl.barrier_ticks steps (0: never counts) */
-static int clamp_run(const pma_ctrl_t *s)
-{
-    return s->barrier_ticks != 0 && s->barrier_run >= s->barrier_ticks;
-}
-
-int pma_ctrl_monitor(pma_ctrl_t *s, int outside_w1, uint32_t law_flags)
-{
-    const uint8_t barrier = (law_flags & (PMA_PPC_FLAG_BARRIER1 | PMA_PPC_FLAG_BARRIER2)) != 0;
-    const int widened = (law_flags & (PMA_PPC_FLAG_WIDEN1 | PMA_PPC_FLAG_WIDEN2)) != 0;
-    s->barrier_run = barrier ? s->barrier_run + 1u : 0u;
-    s->widen1_held &= (uint8_t)(law_flags & PMA_CTRL_SAT_FLAGS);
-    return outside_w1 || clamp_run(s) || widened;
-}
-
 void pma_ctrl_monitor_lost(pma_ctrl_t *s, float t_s, uint32_t law_flags)
 {
     const uint8_t sat = (uint8_t)(law_flags & PMA_CTRL_SAT_FLAGS);
@@ -145,7 +130,7 @@ void pma_ctrl_monitor_lost(pma_ctrl_t *s, float t_s, uint32_t law_flags)
             s->widen1_sat = s->widen1_held = sat;
             if (s->widen1_count != UINT32_MAX) ++s->widen1_count;
         }
-        if (clamp_run(s)) hand_over = 1;
+        if (pma_ctrl_clamp_run(s)) hand_over = 1;
     }
     if (hand_over) s->fallback_active = 1;
 }

@@ -122,8 +122,21 @@ int pma_ctrl_init_arith(pma_ctrl_t *s, const pma_ctrl_setup_t *su);
  * widening). pma_ctrl_monitor counts the clamp run and returns nonzero where this step lost the
  * guarantee; then pma_ctrl_monitor_lost, with the step's time t_s [s] (taken only then: the
  * Q16.16 slot converts it to float only for it), counts the lost ticks, latches `lost` with
- * `lost_at_s` and, with the MFAC fallback, hands over. */
-int pma_ctrl_monitor(pma_ctrl_t *s, int outside_w1, uint32_t law_flags);
+ * `lost_at_s` and, with the MFAC fallback, hands over. The monitor is inline (every step),
+ * pma_ctrl_monitor_lost (controller.c) runs only on a lost tick. */
+static inline int pma_ctrl_clamp_run(const pma_ctrl_t *s)
+{
+    /* the law's clamp has lasted ctrl.barrier_ticks steps (0: never counts) */
+    return s->barrier_ticks != 0 && s->barrier_run >= s->barrier_ticks;
+}
+static inline int pma_ctrl_monitor(pma_ctrl_t *s, int outside_w1, uint32_t law_flags)
+{
+    const uint8_t barrier = (law_flags & (PMA_PPC_FLAG_BARRIER1 | PMA_PPC_FLAG_BARRIER2)) != 0;
+    const int widened = (law_flags & (PMA_PPC_FLAG_WIDEN1 | PMA_PPC_FLAG_WIDEN2)) != 0;
+    s->barrier_run = barrier ? s->barrier_run + 1u : 0u;
+    s->widen1_held &= (uint8_t)(law_flags & PMA_CTRL_SAT_FLAGS);
+    return outside_w1 || pma_ctrl_clamp_run(s) || widened;
+}
 void pma_ctrl_monitor_lost(pma_ctrl_t *s, float t_s, uint32_t law_flags);
 /* The arithmetic's part of pma_ctrl_stream, after the band check. */
 int pma_ctrl_stream_arith(pma_ctrl_t *s, float target_cm);
@@ -170,10 +183,17 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
 /* The end of the Q16.16 slot's control time: 32767 s [Q16.16] (a step at or after it is refused) */
 #define PMA_CTRL_Q16_T_END ((pma_q16_t)32767 * PMA_Q16_ONE)
 /* The same step in the Q16.16 slot's numbers, as the application's tick calls it (no float
- * conversion of its inputs): t [s] and x [cm] in Q16.16; the output both in Q16.16 (*u_q16)
- * and in float (*u). pma_ctrl_step converts its float inputs (range checked) and calls it. */
+ * conversion of its inputs): t [s] and x [cm] in Q16.16; the output in Q16.16 (*u_q16) and, where
+ * u is not NULL, in float (*u). pma_ctrl_step converts its float inputs (range checked) and
+ * calls it. */
 int pma_ctrl_step_q16(pma_ctrl_t *s, pma_q16_t t_s, pma_q16_t x_cm, float openloop_u, pma_q16_t *u_q16,
                       float *u);
+/* 1 where the step's output is its Q16.16 value (*u == pma_q16_to_f32(*u_q16)): every mode but
+ * OPEN_LOOP, whose output is ctrl.openloop_u clamped in float, the float build's value */
+static inline int pma_ctrl_output_in_q16(const pma_ctrl_t *s)
+{
+    return s->mode != PMA_CTRL_MODE_OPEN_LOOP;
+}
 #endif
 
 /* The PPC's guarantee monitor (mode PPC; t the control time since START, e = x - x_r with

@@ -32,7 +32,7 @@ static int to_q16(float v, pma_q16_t *q)
 /* a Q32.32 accumulator (the estimators' and the PID's) rounded to Q16.16, saturated */
 static pma_q16_t q32_to_q16(int64_t a)
 {
-    return pma_q16_sat64(pma_rshift_round(a, 16));
+    return pma_q16_round_sat64(a, 16);
 }
 
 /* MFAC's phi (Q8.24) as the telemetry's Q16.16 signal */
@@ -121,8 +121,8 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
 int pma_ctrl_step_q16(pma_ctrl_t *s, pma_q16_t t, pma_q16_t x, float openloop_u, pma_q16_t *u_q16,
                       float *u)
 {
-    if (s == NULL || u == NULL || u_q16 == NULL) return PMA_ERR_NULL;
-    *u = 0.0f;
+    if (s == NULL || u_q16 == NULL) return PMA_ERR_NULL;
+    if (u != NULL) *u = 0.0f;
     *u_q16 = 0;
     /* Q16.16 time ends at 32767 s (9.1 h): past it the step refuses, and the supervisor
      * faults CONTROLLER (the output goes safe), rather than the reference freezing */
@@ -206,7 +206,7 @@ int pma_ctrl_step_q16(pma_ctrl_t *s, pma_q16_t t, pma_q16_t x, float openloop_u,
                              : openloop_u;
         o->u = pma_q16_from_f32(ol);
         *u_q16 = o->u;
-        *u = ol;
+        if (u != NULL) *u = ol;
         return PMA_OK;
     }
     default:
@@ -217,7 +217,7 @@ int pma_ctrl_step_q16(pma_ctrl_t *s, pma_q16_t t, pma_q16_t x, float openloop_u,
     if (barrier && s->breaches != UINT32_MAX) ++s->breaches;
     o->u = out;
     *u_q16 = out;
-    *u = pma_q16_to_f32(out);
+    if (u != NULL) *u = pma_q16_to_f32(out);
     return PMA_OK;
 }
 

@@ -7,35 +7,45 @@
 
 #include "pma/status.h"
 #include "pma/finite.h"
+#include "pma/fixed.h"
 
-pma_fault_t pma_supervisor_check(const pma_supervisor_limits_t *lim,
-                                 const pma_supervisor_input_t *in)
+/* The first q in [lo, hi] (int64: hi + 1 where none) with pma_q16_to_f32(q) >= x_cm
+ * (at_least) or > x_cm; the predicate is monotonic in q, as the conversion is. */
+static int64_t first_q(int64_t lo, int64_t hi, float x_cm, int at_least)
 {
-    if (lim == NULL || in == NULL) return PMA_FAULT_CONTROLLER;
-    if (in->bus_off) return PMA_FAULT_CAN_BUS_OFF;
-    if (!in->output_active) return PMA_FAULT_NONE;
+    const float inf = INFINITY;
+    while (lo <= hi) {
+        const int64_t mid = lo + (hi - lo) / 2;
+        const float f = pma_q16_to_f32((pma_q16_t)mid);
+        const int holds = at_least ? pma_f32_within(f, x_cm, inf) : !pma_f32_within(f, -inf, x_cm);
+        if (holds) {
+            hi = mid - 1;
+        } else {
+            lo = mid + 1;
+        }
+    }
+    return lo;
+}
 
-    if (in->ticks_since_sample >= lim->sensor_timeout_ticks) return PMA_FAULT_SENSOR_TIMEOUT;
-    switch (in->sensor_status) {
-    case PMA_OK: break;
-    case PMA_ERR_WIRE_BREAK: return PMA_FAULT_SENSOR_WIRE_BREAK;
-    case PMA_ERR_RANGE: return PMA_FAULT_SENSOR_RANGE;
-    default: return PMA_FAULT_SENSOR_READ;
+void pma_supervisor_limits_q16(pma_supervisor_limits_t *lim)
+{
+    if (lim == NULL) return;
+    const int64_t qmin = INT32_MIN, qmax = INT32_MAX;
+    /* a NaN bound: no position is within (pma_f32_within answers false) */
+    if (isnan(lim->x_lo_cm) || isnan(lim->x_hi_cm)) {
+        lim->x_lo_q16 = 1;
+        lim->x_hi_q16 = 0;
+        return;
     }
-    /* a NaN position also trips */
-    if (!pma_f32_within(in->x_cm, lim->x_lo_cm, lim->x_hi_cm)) {
-        return PMA_FAULT_POSITION_LIMIT;
+    const int64_t lo = first_q(qmin, qmax, lim->x_lo_cm, 1);       /* f(q) >= x_lo_cm from here */
+    const int64_t hi = first_q(qmin, qmax, lim->x_hi_cm, 0) - 1;   /* f(q) <= x_hi_cm up to here */
+    if (lo > qmax || hi < qmin || lo > hi) {
+        lim->x_lo_q16 = 1;
+        lim->x_hi_q16 = 0;
+        return;
     }
-    if (in->late_ticks > lim->max_late_ticks) return PMA_FAULT_TICK_OVERRUN;
-    if (!in->running) return PMA_FAULT_NONE;
-
-    if (lim->host_timeout_ticks != 0 && in->ticks_since_host_heartbeat >= lim->host_timeout_ticks) {
-        return PMA_FAULT_HOST_HEARTBEAT_LOST;
-    }
-    if (in->controller_error) return PMA_FAULT_CONTROLLER;
-    if (!pma_isfinite_f32(in->u)) return PMA_FAULT_NOT_FINITE;
-    if (lim->barrier_ticks != 0 && in->barrier_run >= lim->barrier_ticks) return PMA_FAULT_BARRIER;
-    return PMA_FAULT_NONE;
+    lim->x_lo_q16 = (int32_t)lo;
+    lim->x_hi_q16 = (int32_t)hi;
 }
 
 const char *pma_fault_name(int fault)

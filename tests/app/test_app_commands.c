@@ -8,15 +8,15 @@
  * Runs in ADC mode and, for the tables, also in plant-bridge mode. */
 #include "app_test.h"
 
-/* 1,208 bytes (x86-64) with the PPC's fallback MFAC beside the law, its funnel widening, the
+/* 1,216 bytes (x86-64) with the PPC's fallback MFAC beside the law, its funnel widening, the
  * reference feedforward's play operator (controller.h) and the supervisor's limits kept from
- * ARM; the Q16.16 slot adds its
+ * ARM (with their Q16.16 envelope); the Q16.16 slot adds its
  * fixed-point copies of the signals and limits, the fixed-point input and output stages with
  * the parameters they were built from (io_q16.h) and the control time in integers (1,456 bytes) */
 #if PMA_CTRL_Q16
 _Static_assert(sizeof(pma_app_t) <= 1456u, "pma_app_t must stay small (Cortex-M0: 16 KB RAM)");
 #else
-_Static_assert(sizeof(pma_app_t) <= 1208u, "pma_app_t must stay small (Cortex-M0: 16 KB RAM)");
+_Static_assert(sizeof(pma_app_t) <= 1216u, "pma_app_t must stay small (Cortex-M0: 16 KB RAM)");
 #endif
 
 typedef enum { S_IDLE, S_ARMED, S_RUNNING, S_FAULT, S_COUNT } setup_state_t;
@@ -565,12 +565,12 @@ static void test_idle_changes_reach_the_stages_at_arm(void)
     assert_status(set_param(PMA_PARAM_DAC_COUNTS_PER_KPA, vf(cpk)), PMA_OK);
     assert_status(set_param(PMA_PARAM_ADC_OFFSET_CM, vf(app.params.adc_offset_cm + 0.3f)), PMA_OK);
     step();
-    assert_near(app.sensor.x_cm, -1.2f, 0.002);   /* the same counts, 0.3 cm further */
+    assert_near(pma_app_position_cm(&app), -1.2f, 0.002);   /* the same counts, 0.3 cm further */
     command_ok(PMA_CMD_ARM, 0, PMA_OK);
     steps(400);                                    /* the slew from 0 kPa */
     TEST_ASSERT_EQUAL_INT(dac_counts_of(app.params.act_p0_kpa), dac_now());   /* the new DAC scaling */
     TEST_ASSERT_NOT_EQUAL(T_P0_COUNTS, dac_now());
-    assert_near(app.sensor.x_cm, -1.2f, 0.002);
+    assert_near(pma_app_position_cm(&app), -1.2f, 0.002);
 }
 
 /* pma_app_init on a HAL that is not up: the error, state FAULT, no loop. */

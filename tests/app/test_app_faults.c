@@ -396,7 +396,7 @@ static void test_barrier_hands_over_to_mfac(void)
     const float t_u_s = app.params.ppc_t_u_s;
     while (t < 3000) {
         if (t % 100 == 0) send_host_heartbeat((uint8_t)t);
-        const float u_before = app.output.u;
+        const float u_before = pma_app_output_u(&app);
         step();
         ++t;
         assert_state(app.state, PMA_STATE_RUNNING);
@@ -419,7 +419,7 @@ static void test_barrier_hands_over_to_mfac(void)
         }
         TEST_ASSERT_TRUE(o->flags & PMA_CTRL_FLAG_FALLBACK);
         TEST_ASSERT_TRUE(o->flags & PMA_CTRL_FLAG_GUARANTEE_LOST);
-        TEST_ASSERT_TRUE(app.output.u >= app.params.ctrl_u_min && app.output.u <= app.params.ctrl_u_max);
+        TEST_ASSERT_TRUE(pma_app_output_u(&app) >= app.params.ctrl_u_min && pma_app_output_u(&app) <= app.params.ctrl_u_max);
         if (o->t_s >= t_u_s && fabsf(o->e_cm) >= app.params.ppc_w1_cm) ++lost;
     }
     TEST_ASSERT_GREATER_THAN(0u, handover_tick);
@@ -465,12 +465,12 @@ static void test_widening_instead_of_the_clamp(void)
         if (t % 100 == 0) send_host_heartbeat((uint8_t)t);
         /* e = +-1.3 cm >> w1 = 0.2 cm, inside the band, the side changing every 0.4 s */
         pma_fake_adc_set(counts_at((t / 400u) % 2u ? -2.8f : -0.2f));
-        const float u_before = app.output.u;
+        const float u_before = pma_app_output_u(&app);
         step();
         ++t;
         assert_state(app.state, PMA_STATE_RUNNING);
         const pma_ctrl_out_t *o = pma_ctrl_out(&app.ctrl);
-        TEST_ASSERT_TRUE(app.output.u >= app.params.ctrl_u_min && app.output.u <= app.params.ctrl_u_max);
+        TEST_ASSERT_TRUE(pma_app_output_u(&app) >= app.params.ctrl_u_min && pma_app_output_u(&app) <= app.params.ctrl_u_max);
         if (handover_tick != 0) {
             TEST_ASSERT_TRUE(o->flags & PMA_CTRL_FLAG_FALLBACK);
             continue;

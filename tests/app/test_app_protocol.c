@@ -441,7 +441,7 @@ static void test_telemetry_running_only_decimation_and_mask(void)
     assert_near(ta.x_cm, -1.5f, 0.002);
     assert_near(tb.xr_cm, -1.5f, 1e-6);
     assert_near(tb.e_cm, ta.x_cm - tb.xr_cm, 1e-6);
-    assert_near(te.pressure_kpa, app.output.p_kpa, 0.0);
+    assert_near(te.pressure_kpa, pma_app_pressure_kpa(&app), 0.0);
     /* 1 s of running: 100 sets */
     cap_clear();
     steps_hb(1000);
@@ -499,7 +499,7 @@ static void test_bridge_sample_status_and_seq(void)
     m = last_actuator();
     TEST_ASSERT_EQUAL_INT(200, m.seq);
     TEST_ASSERT_EQUAL_INT(PMA_SAMPLE_NEW, m.sample);
-    assert_near(app.sensor.x_cm, -1.5f, 0.002);
+    assert_near(pma_app_position_cm(&app), -1.5f, 0.002);
     /* no new sample: REPEATED, same seq */
     cap_clear();
     step();
@@ -513,14 +513,14 @@ static void test_bridge_sample_status_and_seq(void)
     m = last_actuator();
     TEST_ASSERT_EQUAL_INT(201, m.seq);
     TEST_ASSERT_EQUAL_INT(PMA_SAMPLE_NEW, m.sample);
-    assert_near(app.sensor.x_cm, -1.0f, 0.002);
+    assert_near(pma_app_position_cm(&app), -1.0f, 0.002);
     /* a duplicate of 201: not a new sample */
     send_sample(201, counts_at(-2.0f));
     cap_clear();
     step();
     m = last_actuator();
     TEST_ASSERT_EQUAL_INT(PMA_SAMPLE_REPEATED, m.sample);
-    assert_near(app.sensor.x_cm, -1.0f, 0.002);
+    assert_near(pma_app_position_cm(&app), -1.0f, 0.002);
     TEST_ASSERT_EQUAL_INT(1, app.counters.bridge_repeats);
     /* 202 and 203 lost: 204 is NEW after a GAP */
     send_sample(204, counts_at(-2.0f));
@@ -530,7 +530,7 @@ static void test_bridge_sample_status_and_seq(void)
     TEST_ASSERT_EQUAL_INT(204, m.seq);
     TEST_ASSERT_EQUAL_INT(PMA_SAMPLE_GAP, m.sample);
     TEST_ASSERT_EQUAL_INT(1, app.counters.bridge_gaps);
-    assert_near(app.sensor.x_cm, -2.0f, 0.002);
+    assert_near(pma_app_position_cm(&app), -2.0f, 0.002);
     /* wrap-around 255 -> 0 is no gap */
     send_sample(255, counts_at(-2.0f));
     step();
@@ -549,7 +549,7 @@ static void test_bridge_sample_status_and_seq(void)
     m = last_actuator();
     TEST_ASSERT_EQUAL_INT(2, m.seq);
     TEST_ASSERT_EQUAL_INT(PMA_SAMPLE_NEW, m.sample);
-    assert_near(app.sensor.x_cm, -2.4f, 0.002);
+    assert_near(pma_app_position_cm(&app), -2.4f, 0.002);
     /* ARMED: the pressure command goes out in the actuator frame */
     command_ok(PMA_CMD_ARM, 0, PMA_OK);
     for (uint8_t s = 3; s < 30; ++s) {
@@ -588,7 +588,7 @@ static void test_bridge_parameter(void)
     step();
     TEST_ASSERT_EQUAL_INT(bad_before + 1u, app.counters.frames_bad);
     TEST_ASSERT_EQUAL_INT(0, app.bridge.have);
-    assert_near(app.sensor.x_cm, -1.5f, 0.002); /* the ADC's position, not the frame's */
+    assert_near(pma_app_position_cm(&app), -1.5f, 0.002); /* the ADC's position, not the frame's */
     TEST_ASSERT_EQUAL_INT(0, sent(PMA_PROTO_PLANT_ACTUATOR_FRAME_ID));
     TEST_ASSERT_EQUAL_INT(0u, dac_now()); /* the DAC is written every tick (safe: 0 kPa) */
     struct pma_proto_heartbeat_t h = next_heartbeat();
@@ -622,7 +622,7 @@ static void test_bridge_parameter(void)
     m = last_actuator();
     TEST_ASSERT_EQUAL_INT(40, m.seq);
     TEST_ASSERT_EQUAL_INT(PMA_SAMPLE_NEW, m.sample);
-    assert_near(app.sensor.x_cm, -2.0f, 0.002);
+    assert_near(pma_app_position_cm(&app), -2.0f, 0.002);
     h = next_heartbeat();
     TEST_ASSERT_TRUE(h.flags & PMA_HB_PLANT_BRIDGE);
     /* ARMED over the bridge: the pressure leaves in frames, the DAC is left alone */
@@ -648,7 +648,7 @@ static void test_bridge_parameter(void)
     send_sample(62, counts_at(-2.5f));
     cap_clear();
     step();
-    assert_near(app.sensor.x_cm, -1.0f, 0.002);
+    assert_near(pma_app_position_cm(&app), -1.0f, 0.002);
     TEST_ASSERT_EQUAL_INT(0, sent(PMA_PROTO_PLANT_ACTUATOR_FRAME_ID));
     TEST_ASSERT_GREATER_THAN(dac_writes, pma_fake_dac_write_count());
 
@@ -685,7 +685,7 @@ static void test_wrong_length_frames_dropped(void)
     step();
     TEST_ASSERT_EQUAL_INT(0, cap.total);
     TEST_ASSERT_EQUAL_INT(1, app.counters.frames_bad);
-    assert_near(app.sensor.x_cm, -1.5f, 0.002);
+    assert_near(pma_app_position_cm(&app), -1.5f, 0.002);
 
     /* HOST_HEARTBEAT of the wrong length does not feed the host timeout */
     to_running(0);

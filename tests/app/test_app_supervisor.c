@@ -12,6 +12,7 @@
  * FIXED (at once, no slew limit), non-finite inputs. */
 #include "app_test.h"
 #include "pma/finite.h"
+#include "pma/fixed.h"
 
 /* ------------------------------------------------------------ supervisor -- */
 
@@ -197,6 +198,65 @@ static void test_within_is_the_float_comparison(void)
         ++checked;
     }
     TEST_ASSERT_EQUAL_UINT(NS * NS * NS + 20000u, checked);
+}
+
+/* The Q16.16 envelope answers as the float check of the position's float, for every q: around
+ * both of its ends and at random, on envelopes of every kind (the defaults, a point, one where
+ * the conversion rounds (|x| >= 256 cm), beyond the Q16.16 range, infinite, empty, NaN); and
+ * the supervisor checks a Q16.16 position with it. */
+static void test_supervisor_q16_envelope_is_the_float_check(void)
+{
+    const float nan = from_bits(0x7FC00000u);
+    const float env[][2] = {
+        {-3.5f, 0.5f}, {-1.0f, -1.0f}, {-0.0f, 0.0f}, {0.0f, -0.0f}, {1e-9f, 2e-9f},
+        {-300.0f, 300.25f}, {-256.0f, 256.0f}, {255.999f, 1000.0001f}, {-40000.0f, 40000.0f},
+        {-INFINITY, INFINITY}, {-INFINITY, -1.25f}, {1.25f, INFINITY}, {40000.0f, 50000.0f},
+        {-50000.0f, -40000.0f}, {1.0f, -1.0f}, {nan, 1.0f}, {-1.0f, nan}, {INFINITY, INFINITY},
+    };
+    enum { NE = sizeof env / sizeof env[0] };
+    uint32_t seed = 0x2545F491u;
+    unsigned checked = 0;
+    for (unsigned e = 0; e < NE; ++e) {
+        pma_supervisor_limits_t l = {.x_lo_cm = env[e][0], .x_hi_cm = env[e][1]};
+        pma_supervisor_limits_q16(&l);
+        const int64_t ends[] = {l.x_lo_q16, l.x_hi_q16, 0, INT32_MIN, INT32_MAX};
+        for (unsigned k = 0; k < sizeof ends / sizeof ends[0]; ++k) {
+            for (int64_t d = -300; d <= 300; ++d) {
+                const int64_t q64 = ends[k] + d;
+                if (q64 < INT32_MIN || q64 > INT32_MAX) continue;
+                const int32_t q = (int32_t)q64;
+                TEST_ASSERT_EQUAL_INT(pma_f32_within(pma_q16_to_f32(q), l.x_lo_cm, l.x_hi_cm),
+                                      q >= l.x_lo_q16 && q <= l.x_hi_q16);
+                ++checked;
+            }
+        }
+        for (unsigned i = 0; i < 2000u; ++i) {
+            const int32_t q = (int32_t)test_rand_u32(&seed);
+            TEST_ASSERT_EQUAL_INT(pma_f32_within(pma_q16_to_f32(q), l.x_lo_cm, l.x_hi_cm),
+                                  q >= l.x_lo_q16 && q <= l.x_hi_q16);
+            ++checked;
+        }
+    }
+    TEST_ASSERT_TRUE(checked > NE * 2000u);
+
+    /* the supervisor on a Q16.16 position: the inclusive ends, one LSB beyond trips */
+    setup_supervisor();
+    pma_supervisor_limits_q16(&lim);
+    TEST_ASSERT_EQUAL_INT32(-7 * 32768, lim.x_lo_q16);   /* -3.5 cm */
+    TEST_ASSERT_EQUAL_INT32(32768, lim.x_hi_q16);        /* 0.5 cm */
+    in.x_cm = nan;   /* not read where the position is x_q16 */
+    in.x_in_q16 = 1;
+    in.x_q16 = 32768;
+    check(PMA_FAULT_NONE);
+    in.x_q16 = -7 * 32768;
+    check(PMA_FAULT_NONE);
+    in.x_q16 = 32769;
+    check(PMA_FAULT_POSITION_LIMIT);
+    in.x_q16 = -7 * 32768 - 1;
+    check(PMA_FAULT_POSITION_LIMIT);
+    in.x_q16 = INT32_MIN;
+    check(PMA_FAULT_POSITION_LIMIT);
+    pma_supervisor_limits_q16(NULL);   /* no crash */
 }
 
 static void test_supervisor_inactive_only_bus_off(void)
@@ -456,6 +516,7 @@ int main(void)
     RUN_TEST(test_supervisor_each_condition);
     RUN_TEST(test_supervisor_nan_position_trips);
     RUN_TEST(test_within_is_the_float_comparison);
+    RUN_TEST(test_supervisor_q16_envelope_is_the_float_check);
     RUN_TEST(test_supervisor_inactive_only_bus_off);
     RUN_TEST(test_supervisor_armed_skips_running_checks);
     RUN_TEST(test_supervisor_priority);

@@ -370,7 +370,7 @@ static void take(snap_t *s)
     s->state = w.app.state;
     s->fault = w.app.fault;
     s->params = w.app.params;
-    s->p_kpa = w.app.output.p_kpa;
+    s->p_kpa = pma_app_pressure_kpa(&w.app);
     s->dac_counts = w.app.output.dac_counts;
     s->dac_writes = pma_fake_dac_write_count();
     s->counters = w.app.counters;
@@ -433,7 +433,7 @@ static void check_always(void)
     const uint32_t hz = a->params.sys_tick_hz;
     CHECK(a->timing.period_us == (1000000u + hz / 2u) / hz);
     CHECK(a->timing.tick_started);
-    CHECK(isfinite(a->output.p_kpa) && a->output.p_kpa >= 0.0f && a->output.p_kpa <= 1000.0f);
+    CHECK(isfinite(pma_app_pressure_kpa(a)) && pma_app_pressure_kpa(a) >= 0.0f && pma_app_pressure_kpa(a) <= 1000.0f);
     if (is_active(a->state)) CHECK(config_armable(&a->params));
 }
 
@@ -442,7 +442,7 @@ static void check_always(void)
 static void check_output_untouched(const snap_t *s)
 {
     CHECK(pma_fake_dac_write_count() == s->dac_writes);
-    CHECK(w.app.output.p_kpa == s->p_kpa || (isnan(w.app.output.p_kpa) && isnan(s->p_kpa)));
+    CHECK(pma_app_pressure_kpa(&w.app) == s->p_kpa || (isnan(pma_app_pressure_kpa(&w.app)) && isnan(s->p_kpa)));
     CHECK(w.app.output.dac_counts == s->dac_counts);
     CHECK(w.tx.actuator == 0);
 }
@@ -478,8 +478,8 @@ static void check_command(const snap_t *s, uint8_t cmd, uint8_t arg, int result)
         if (s->state == PMA_STATE_IDLE) {
             const pma_params_t *p = &a->params;
             CHECK(a->sensor.status == PMA_OK);
-            CHECK(a->sensor.x_cm >= p->safety_x_min_cm - p->safety_x_margin_cm &&
-                  a->sensor.x_cm <= p->safety_x_max_cm + p->safety_x_margin_cm);
+            CHECK(pma_app_position_cm(a) >= p->safety_x_min_cm - p->safety_x_margin_cm &&
+                  pma_app_position_cm(a) <= p->safety_x_max_cm + p->safety_x_margin_cm);
             CHECK(config_armable(p) && p->ctrl_u_min < p->ctrl_u_max);
             if (bridge_on()) CHECK(a->sensor.ticks_since_sample < p->safety_sensor_timeout_ticks);
         }
@@ -776,8 +776,8 @@ static void do_tick(uint32_t late)
     if (s.bus_off) CHECK(a->state == PMA_STATE_FAULT);
     if (is_active(a->state)) {
         CHECK(a->sensor.status == PMA_OK);
-        CHECK(a->sensor.x_cm >= p->safety_x_min_cm - p->safety_x_margin_cm &&
-              a->sensor.x_cm <= p->safety_x_max_cm + p->safety_x_margin_cm);
+        CHECK(pma_app_position_cm(a) >= p->safety_x_min_cm - p->safety_x_margin_cm &&
+              pma_app_position_cm(a) <= p->safety_x_max_cm + p->safety_x_margin_cm);
         CHECK(late <= p->safety_max_late_ticks);
         if (bridge_on()) CHECK(a->sensor.ticks_since_sample < p->safety_sensor_timeout_ticks);
         if (a->state == PMA_STATE_RUNNING) {
@@ -793,7 +793,7 @@ static void do_tick(uint32_t late)
     }
 
     if (is_active(a->state)) {
-        const float prev = s.p_kpa, pk = a->output.p_kpa;
+        const float prev = s.p_kpa, pk = pma_app_pressure_kpa(a);
         CHECK(isfinite(pk) && pk >= 0.0f);
         const float lo = fminf(prev, p->act_p_min_kpa), hi = fmaxf(prev, p->act_p_max_kpa);
         CHECK(pk >= lo && pk <= hi);
@@ -802,16 +802,16 @@ static void do_tick(uint32_t late)
             CHECK(fabsf(pk - prev) <= step * (1.0f + 1e-5f) + 1e-4f * fmaxf(1.0f, fabsf(prev)));
         }
         if (a->state == PMA_STATE_ARMED) {
-            CHECK(a->output.u == 0.0f);
+            CHECK(pma_app_output_u(a) == 0.0f);
         } else {
-            CHECK(isfinite(a->output.u));
+            CHECK(isfinite(pma_app_output_u(a)));
             if (p->ctrl_mode == PMA_CTRL_MODE_OFF) {
-                CHECK(a->output.u == 0.0f);
+                CHECK(pma_app_output_u(a) == 0.0f);
             } else {
-                CHECK(a->output.u >= p->ctrl_u_min && a->output.u <= p->ctrl_u_max);
+                CHECK(pma_app_output_u(a) >= p->ctrl_u_min && pma_app_output_u(a) <= p->ctrl_u_max);
             }
         }
-        CHECK(near(pk, oracle_active_kpa(p, a->output.u, prev, period_s)));
+        CHECK(near(pk, oracle_active_kpa(p, pma_app_output_u(a), prev, period_s)));
         uint16_t c = 0;
         CHECK(oracle_counts(p, pk, &c));
         CHECK(a->output.dac_counts == c);
@@ -833,14 +833,14 @@ static void do_tick(uint32_t late)
         const bool output_fault = s.state != PMA_STATE_FAULT && a->fault == PMA_FAULT_OUTPUT;
         if (output_fault && is_active(s.state)) {
             CHECK(!bridge_on());
-            CHECK(near(a->output.p_kpa, oracle_safe_kpa(p, oracle_active_kpa(p, a->output.u, s.p_kpa, period_s))));
+            CHECK(near(pma_app_pressure_kpa(a), oracle_safe_kpa(p, oracle_active_kpa(p, pma_app_output_u(a), s.p_kpa, period_s))));
         } else {
-            CHECK(a->output.p_kpa == oracle_safe_kpa(p, s.p_kpa));
+            CHECK(pma_app_pressure_kpa(a) == oracle_safe_kpa(p, s.p_kpa));
         }
         /* the counts of that pressure; if the DAC refuses them (or they cannot
          * be computed), 0 counts (0 V / 0 mA), in FAULT */
         uint16_t c = 0;
-        const bool convertible = oracle_counts(p, a->output.p_kpa, &c);
+        const bool convertible = oracle_counts(p, pma_app_pressure_kpa(a), &c);
         if (convertible) {
             CHECK(a->output.dac_counts == c || (a->output.dac_counts == 0u && a->state == PMA_STATE_FAULT));
         } else {
@@ -915,7 +915,7 @@ static void start_app(void)
         CHECK(a->state == PMA_STATE_IDLE && a->fault == PMA_FAULT_NONE);
     }
     w.node = (uint8_t)(w.plat.node_id >= 0 ? (uint32_t)w.plat.node_id : a->params.sys_node_id);
-    CHECK(a->output.p_kpa == oracle_safe_kpa(&a->params, 0.0f));
+    CHECK(pma_app_pressure_kpa(a) == oracle_safe_kpa(&a->params, 0.0f));
     w.phys = PHYS_SAFE; /* the MCU (re)started: its DAC output was reset */
     reset_tx_seen();
     drain();
@@ -1276,7 +1276,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                 "kPa dac %5u u %g x %g sensor %d ticks %u\n",
                 (unsigned)i, g_op, r[0], r[1], r[2], r[3], r[4],
                 pma_app_state_name(w.app.state), pma_fault_name(w.app.fault),
-                (double)w.app.output.p_kpa, w.app.output.dac_counts, (double)w.app.output.u, (double)w.app.sensor.x_cm,
+                (double)pma_app_pressure_kpa(&w.app), w.app.output.dac_counts, (double)pma_app_output_u(&w.app), (double)pma_app_position_cm(&w.app),
                 w.app.sensor.status, (unsigned)w.ticks);
 #endif
     }

@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: Apache-2.0
 """docs/firmware.md and docs/protocol.md give the supervisor's check order, which decides
 which fault is latched when several hold; both must be the order of
-firmware/app/supervisor.c."""
+pma_supervisor_check in firmware/app/supervisor.h (inline there: the tick calls it)."""
 from __future__ import annotations
 
 import re
@@ -14,8 +14,9 @@ FAULTS = ["CAN_BUS_OFF", "SENSOR_TIMEOUT", "SENSOR_WIRE_BREAK", "SENSOR_RANGE", 
 
 
 def code_order() -> list[str]:
-    src = (REPO / "firmware/app/supervisor.c").read_text()
-    body = src[src.index("pma_supervisor_check("):src.index("const char *pma_fault_name")]
+    src = (REPO / "firmware/app/supervisor.h").read_text()
+    body = src[src.index("static inline pma_fault_t pma_supervisor_check("):]
+    body = body[:body.index("\n}\n")]
     body = body[body.index("return PMA_FAULT_CONTROLLER;") + 1:]   # after the NULL check
     return [n for n in re.findall(r"return PMA_FAULT_([A-Z_]+);", body) if n != "NONE"]
 
@@ -37,7 +38,7 @@ def test_the_code_checks_every_fault_once() -> None:
 
 def test_firmware_md_gives_the_code_order() -> None:
     doc = (REPO / "docs/firmware.md").read_text()
-    assert doc_order(doc, "The supervisor (`firmware/app/supervisor.c`) checks", "| code |") == code_order()
+    assert doc_order(doc, "The supervisor (`firmware/app/supervisor.h`) checks", "| code |") == code_order()
 
 
 def test_protocol_md_gives_the_code_order() -> None:

@@ -106,6 +106,39 @@ static void test_udiv64_q32_is_exact(void)
     }
 }
 
+static void check_round_sat(int64_t v, unsigned shift)
+{
+    const pma_q16_t got = pma_q16_round_sat64(v, shift), want = pma_q16_sat64(pma_rshift_round(v, shift));
+    if (got != want) {
+        pma_test_fail("pma_q16_round_sat64(0x%08lx%08lx, %u) = %ld, want %ld",
+                      (unsigned long)((uint64_t)v >> 32), (unsigned long)((uint64_t)v & 0xFFFFFFFFu), shift,
+                      (long)got, (long)want);
+    }
+}
+
+/* The rounded, saturated shift (ARMv6-M: in two words) is its definition for every shift 1..31:
+ * around the saturation limits, the ties and 0, at the ends of the 64-bit range, at random. */
+static void test_round_sat64_is_its_definition(void)
+{
+    uint64_t s = 0xD1B54A32D192ED03u;
+    for (unsigned shift = 1; shift <= 31; ++shift) {
+        const int64_t one = (int64_t)1 << shift, half = one / 2;
+        const int64_t centres[] = {0, half, -half, (int64_t)INT32_MAX * one, (int64_t)INT32_MIN * one,
+                                   (int64_t)INT32_MAX * one + half, (int64_t)INT32_MIN * one - half,
+                                   (int64_t)UINT32_MAX * one, -(int64_t)UINT32_MAX * one,
+                                   INT64_MAX - 4, INT64_MIN + 5};
+        for (size_t c = 0; c < sizeof centres / sizeof centres[0]; ++c) {
+            for (int64_t d = -4; d <= 4; ++d) check_round_sat(centres[c] + d, shift);
+        }
+        for (int i = 0; i < 400; ++i) {
+            const uint64_t r = next64(&s);
+            const int64_t v = (int64_t)(r >> (r & 63u));   /* every magnitude: 1 to 63 bits */
+            check_round_sat(v == INT64_MIN ? v + 1 : v, shift);
+            check_round_sat(v == INT64_MIN ? -(v + 1) : -v, shift);
+        }
+    }
+}
+
 static void test_conversions(void)
 {
     TEST_ASSERT_EQUAL_INT(0, pma_q16_from_f32(NAN));
@@ -167,6 +200,26 @@ static void test_conversions_match_their_definitions(void)
         const pma_q16_t a = (pma_q16_t)s;
         const float want = (float)a * (1.0f / 65536.0f), got = pma_q16_to_f32(a);
         TEST_ASSERT_EQUAL_MEMORY(&want, &got, sizeof want);
+    }
+    /* every magnitude of 1 to 31 bits, both signs; and from 25 bits on (where the significand
+     * rounds) the ties exactly, on odd and even significands, the carry into the exponent */
+    for (unsigned bits = 1; bits <= 31; ++bits) {
+        for (int i = 0; i < 64; ++i) {
+            s = s * 1664525u + 1013904223u;
+            uint32_t m = (s >> (32u - bits)) | (1u << (bits - 1u));
+            if (bits >= 25u && i < 16) {
+                const unsigned low = bits - 24u;   /* the bits below the significand */
+                m = ((m >> low) << low) | (1u << (low - 1u));
+                if (i < 2) m = (0xFFFFFFu << low) | (1u << (low - 1u)) | (uint32_t)(i & 1);
+            }
+            const pma_q16_t as2[] = {(pma_q16_t)m, -(pma_q16_t)m};
+            for (int k = 0; k < 2; ++k) {
+                const float want = (float)as2[k] * (1.0f / 65536.0f), got = pma_q16_to_f32(as2[k]);
+                if (memcmp(&want, &got, sizeof want) != 0) {
+                    pma_test_fail("q16_to_f32(%ld) = %.9g, want %.9g", (long)as2[k], (double)got, (double)want);
+                }
+            }
+        }
     }
 }
 
@@ -266,6 +319,7 @@ int main(void)
     RUN_TEST(test_smul_rounds_and_saturates);
     RUN_TEST(test_sdiv);
     RUN_TEST(test_udiv64_q32_is_exact);
+    RUN_TEST(test_round_sat64_is_its_definition);
     RUN_TEST(test_conversions);
     RUN_TEST(test_conversions_match_their_definitions);
     RUN_TEST(test_tan_halfpi_accuracy);

@@ -112,8 +112,9 @@ pma_q16_t pma_q16_from_f32(float x)
 /* (float)a 2^-16 (exact scaling: every nonzero result is a normal float, at least 2^-16).
  * Where the core has no FPU, from the integer's bits without a float operation or a
  * count-leading-zeros call (the library conversion costs about 60 instructions on a Cortex-M0,
- * this about 45): a = m 2^-n with m normalised to bit 31, the float's 24-bit significand the
- * top of m rounded to nearest even as the conversion (float)a rounds, its exponent 15 - n.
+ * this 25 to 40 by the magnitude): a = m 2^-n with m normalised to bit 31, the float's 24-bit
+ * significand the top of m rounded to nearest even as the conversion (float)a rounds, its
+ * exponent 15 - n.
  * Elsewhere the conversion, with the scaling done on the exponent. Both give the same bits
  * (tests/unit/test_fixed.c compares them with (float)a / 65536 on every core). */
 float pma_q16_to_f32(pma_q16_t a)
@@ -122,21 +123,17 @@ float pma_q16_to_f32(pma_q16_t a)
 #if defined(__arm__) && !defined(__ARM_FP)
     const uint32_t sign = a < 0 ? 0x80000000u : 0u;
     uint32_t m = a < 0 ? 0u - (uint32_t)a : (uint32_t)a;      /* 1 .. 2^31 */
-    uint32_t n = 0;
-    if (m < 0x10000u) { m <<= 16; n += 16u; }
-    if (m < 0x1000000u) { m <<= 8; n += 8u; }
-    if (m < 0x10000000u) { m <<= 4; n += 4u; }
-    if (m < 0x40000000u) { m <<= 2; n += 2u; }
-    if (m < 0x80000000u) { m <<= 1; n += 1u; }
-    uint32_t mant = m >> 8;                                   /* 24 bits, the top one set */
+    uint32_t e = 127u + 15u;                                  /* the exponent of m at bit 31 */
+    if ((m >> 16) == 0u) { m <<= 16; e -= 16u; }              /* shift tests: no constant loads */
+    if ((m >> 24) == 0u) { m <<= 8; e -= 8u; }
+    if ((m >> 28) == 0u) { m <<= 4; e -= 4u; }
+    if ((m >> 30) == 0u) { m <<= 2; e -= 2u; }
+    if ((m >> 31) == 0u) { m <<= 1; e -= 1u; }
+    const uint32_t mant = m >> 8;                             /* 24 bits, the top one set */
     const uint32_t rest = m & 0xFFu;
-    if (rest > 0x80u || (rest == 0x80u && (mant & 1u))) ++mant;   /* to nearest, ties even */
-    uint32_t e = 127u + 15u - n;
-    if (mant >> 24) {                                         /* rounded up to 2^24 */
-        mant >>= 1;
-        ++e;
-    }
-    const uint32_t b = sign | (e << 23) | (mant & 0x7FFFFFu);
+    /* the top bit adds one to the exponent field ((e - 1) << 23 + mant), so that rounding up to
+     * 2^24 carries into it; to nearest, ties even: up where rest + (mant & 1) > 1/2 */
+    const uint32_t b = sign | (((e - 1u) << 23) + mant + (uint32_t)(rest + (mant & 1u) > 0x80u));
 #else
     const float f0 = (float)a;
     uint32_t b;

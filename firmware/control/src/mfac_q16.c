@@ -99,7 +99,7 @@ static inline int32_t estimate(const pma_mfac_q16_t *s, pma_q16_t y_cm, uint32_t
     if (innov_q24 >= INT32_MIN && innov_q24 <= INT32_MAX) {
         dphi_q24 = pma_rshift_round(pma_mul32(k1_q24, (int32_t)innov_q24), 24);
     } else {
-        const pma_q16_t innov = pma_q16_sat64(pma_rshift_round(innov_q24, 8));
+        const pma_q16_t innov = pma_q16_round_sat64(innov_q24, 8);
         dphi_q24 = pma_rshift_round(pma_mul32(k1_q24, innov), 16);
     }
     int32_t phi = pma_q16_sat64((int64_t)s->phi_q24 + dphi_q24);   /* Q8.24, saturated */

@@ -56,7 +56,7 @@ int pma_pid_step_q16(pma_pid_q16_t *s, pma_q16_t r_cm, pma_q16_t y_cm, pma_q16_t
     const pma_q16_t p = pma_q16_smul(s->kp, e);
     const pma_q16_t d = pma_q16_ssub(pma_q16_smul_q30(s->d, s->d_a),
                                      pma_q16_smul(s->d_b, pma_q16_ssub(y_cm, y1)));
-    const pma_q16_t i = pma_q16_sat64(pma_rshift_round(s->i_q32, 16));
+    const pma_q16_t i = pma_q16_round_sat64(s->i_q32, 16);
     const pma_q16_t v = pma_q16_sadd(pma_q16_sadd(p, i), d);
     uint32_t flags = 0;
     pma_q16_t out = v;

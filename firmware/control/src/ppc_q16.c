@@ -222,25 +222,25 @@ int pma_ppc_step_ext_q16(pma_ppc_q16_t *s, pma_q16_t t_s, pma_q16_t x_cm, pma_q1
     o->alpha = tuning_alpha(s, t_s);
     o->e_cm = pma_q16_ssub(x_cm, xr_cm);                                        /* 8 */
     const int64_t lambda1_q24 = times_alpha_q24(o->e_cm, o->alpha);               /* 16 */
-    o->lambda1_cm = pma_q16_sat64(pma_rshift_round(lambda1_q24, 8));
+    o->lambda1_cm = pma_q16_round_sat64(lambda1_q24, 8);
     /* channel 0's step changes only bit 0 of widen_bits: the copy serves both channels */
     const uint32_t widen_bits = s->widen_bits;
     const pma_q30_t r1 = channel_r(s, widen_bits, 0, t_s, lambda1_q24, s->inv_w1_q24,
                                    raw_r(lambda1_q24, s->inv_w1_q24), &o->g1, &o->flags);
     o->chi = transform(s, r1, &sec2, &o->flags, PMA_PPC_FLAG_SOFT1);              /* 18 */
     const int64_t theta_q24 = -pma_rshift_round(pma_mul32(s->a, o->chi), 8);      /* 17 */
-    o->theta_cm_s = pma_q16_sat64(pma_rshift_round(theta_q24, 8));
+    o->theta_cm_s = pma_q16_round_sat64(theta_q24, 8);
     const int64_t lambda2_q24 = times_alpha_q24(v_cm_s, o->alpha) - theta_q24;     /* 19 */
-    o->lambda2_cm_s = pma_q16_sat64(pma_rshift_round(lambda2_q24, 8));
+    o->lambda2_cm_s = pma_q16_round_sat64(lambda2_q24, 8);
     const pma_q30_t r2 = channel_r(s, widen_bits, 1, t_s, lambda2_q24, s->inv_w2_q24,
                                    raw_r(lambda2_q24, s->inv_w2_q24), &o->g2, &o->flags);
     const int32_t inv_w2 = widened_inv_w(s->inv_w2_q24, o->g2);   /* of the funnel, Q8.24 */
     o->delta = transform(s, r2, &sec2, &o->flags, PMA_PPC_FLAG_SOFT2);            /* 22 */
-    o->beta_s_cm = pma_q16_sat64(pma_rshift_round(pma_mul32(sec2, inv_w2), 24));  /* 21 */
+    o->beta_s_cm = pma_q16_round_sat64(pma_mul32(sec2, inv_w2), 24);  /* 21 */
     o->u_law = pma_q16_sneg(pma_q16_smul(pma_q16_smul(s->c, o->beta_s_cm), o->delta)); /* 20 */
 
     /* without the feedforward out.u_ff keeps ff_init from reset: no 64-bit rounding per step */
-    if (s->ff_k > 0) o->u_ff = pma_q16_sat64(pma_rshift_round(s->u_ff_q32, 16));
+    if (s->ff_k > 0) o->u_ff = pma_q16_round_sat64(s->u_ff_q32, 16);
     /* the clamp and anti-windup see the whole output (saturating sums) */
     pma_q16_t v = pma_q16_sadd(o->u_ff, o->u_law);
     if (u_ext != 0) v = pma_q16_sadd(v, u_ext);

@@ -366,9 +366,9 @@ int pma_offline_tick(uint16_t raw_counts, pma_offline_tick_t *out)
     out->state = app.state;
     out->fault = app.fault;
     out->sensor_status = app.sensor.status;
-    out->x_cm = app.sensor.x_cm;
-    out->u = app.output.u;
-    out->p_kpa = app.output.p_kpa;
+    out->x_cm = pma_app_position_cm(&app);
+    out->u = pma_app_output_u(&app);
+    out->p_kpa = pma_app_pressure_kpa(&app);
     out->barrier_run = app.ctrl.barrier_run;
     return actuator ? PMA_OK : PMA_ERR_IO;
 }

@@ -75,8 +75,10 @@ int pma_hal_dac_write(uint16_t counts);
 /* Every port accepts at least (and the fake exactly) this many filters. */
 #define PMA_CAN_FILTERS_MAX 8u
 
+/* 12 bytes, aligned to 4 so that a frame is copied as three words: at the 2 bytes its
+ * members need, GCC copies it with a library memcpy call, byte by byte on ARMv6-M. */
 typedef struct pma_can_frame {
-    uint16_t id;                     /* 0..PMA_CAN_ID_MAX */
+    _Alignas(4) uint16_t id;         /* 0..PMA_CAN_ID_MAX */
     uint8_t dlc;                     /* number of data bytes, 0..8 */
     uint8_t data[PMA_CAN_DLC_MAX];
 } pma_can_frame_t;

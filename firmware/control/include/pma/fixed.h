@@ -92,6 +92,26 @@ static inline pma_q16_t pma_q16_sat64(int64_t a)
     return (pma_q16_t)a;
 }
 
+/* pma_q16_sat64(pma_rshift_round(p, shift)) for 1 <= shift <= 31, the same value for every p
+ * (|p| < 2^63). On ARMv6-M the magnitude is rounded and shifted in its two words and compared
+ * with the limit there (a 64-bit rounding, shift and saturation are each several instructions
+ * on Thumb-1); elsewhere the composition itself. */
+static inline pma_q16_t pma_q16_round_sat64(int64_t p, unsigned shift)
+{
+#if defined(__ARM_ARCH_6M__)
+    const int neg = p < 0;
+    const uint64_t m = neg ? 0u - (uint64_t)p : (uint64_t)p;
+    const uint32_t lo = (uint32_t)m, lo_r = lo + ((uint32_t)1 << (shift - 1u));
+    const uint32_t hi = (uint32_t)(m >> 32) + (lo_r < lo);   /* with the rounding's carry */
+    if (hi >> shift) return neg ? PMA_Q16_MIN : PMA_Q16_MAX;  /* |result| >= 2^32 */
+    const uint32_t r = (hi << (32u - shift)) | (lo_r >> shift);
+    if (neg) return r >= 0x80000000u ? PMA_Q16_MIN : (pma_q16_t)(0u - r);
+    return r > 0x7FFFFFFFu ? PMA_Q16_MAX : (pma_q16_t)r;
+#else
+    return pma_q16_sat64(pma_rshift_round(p, shift));
+#endif
+}
+
 /* a + b, saturating; overflow is detected in unsigned math (the operands
  * share a sign and the sum does not). */
 static inline pma_q16_t pma_q16_sadd(pma_q16_t a, pma_q16_t b)
@@ -143,14 +163,14 @@ static inline pma_q16_t pma_q16_smul(pma_q16_t a, pma_q16_t b)
     if (m > limit) return neg ? PMA_Q16_MIN : PMA_Q16_MAX;
     return neg ? (pma_q16_t)(0u - m) : (pma_q16_t)m;
 #else
-    return pma_q16_sat64(pma_rshift_round(pma_mul32(a, b), 16));
+    return pma_q16_round_sat64(pma_mul32(a, b), 16);
 #endif
 }
 
 /* a (Q16.16) times b (Q2.30) -> Q16.16, rounded, saturating. */
 static inline pma_q16_t pma_q16_smul_q30(pma_q16_t a, pma_q30_t b)
 {
-    return pma_q16_sat64(pma_rshift_round(pma_mul32(a, b), 30));
+    return pma_q16_round_sat64(pma_mul32(a, b), 30);
 }
 
 /* Clamp a to [lo, hi] (requires lo <= hi). */
