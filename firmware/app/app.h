@@ -273,8 +273,6 @@ typedef struct pma_app_output {
 #if PMA_CTRL_Q16
     uint8_t u_in_q16;              /* 1: u_q16 is the output and its float is made only when
                                       read (every mode but OPEN_LOOP, whose output is a float) */
-#endif
-#if PMA_CTRL_Q16
     pma_app_output_q16_t q16;
 #endif
 } pma_app_output_t;

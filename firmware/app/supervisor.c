@@ -31,21 +31,12 @@ void pma_supervisor_limits_q16(pma_supervisor_limits_t *lim)
 {
     if (lim == NULL) return;
     const int64_t qmin = INT32_MIN, qmax = INT32_MAX;
-    /* a NaN bound: no position is within (pma_f32_within answers false) */
-    if (isnan(lim->x_lo_cm) || isnan(lim->x_hi_cm)) {
-        lim->x_lo_q16 = 1;
-        lim->x_hi_q16 = 0;
-        return;
-    }
+    /* a NaN bound makes the range empty by itself: no comparison with it holds */
     const int64_t lo = first_q(qmin, qmax, lim->x_lo_cm, 1);       /* f(q) >= x_lo_cm from here */
     const int64_t hi = first_q(qmin, qmax, lim->x_hi_cm, 0) - 1;   /* f(q) <= x_hi_cm up to here */
-    if (lo > qmax || hi < qmin || lo > hi) {
-        lim->x_lo_q16 = 1;
-        lim->x_hi_q16 = 0;
-        return;
-    }
-    lim->x_lo_q16 = (int32_t)lo;
-    lim->x_hi_q16 = (int32_t)hi;
+    const int empty = lo > hi;   /* also where either end lies beyond int32 */
+    lim->x_lo_q16 = empty ? 1 : (int32_t)lo;
+    lim->x_hi_q16 = empty ? 0 : (int32_t)hi;
 }
 
 const char *pma_fault_name(int fault)
