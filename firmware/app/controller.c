@@ -66,6 +66,7 @@ int pma_ctrl_start(pma_ctrl_t *s, const pma_params_t *p, float period_s)
         c->ff_gain_per_s = p->ppc_ff_gain_per_s;
         c->ff_init = p->ppc_ff_init;
         c->period_s = period_s;
+        su.u_lpf = (pma_lpf_config_t){.fc_hz = p->ppc_u_lpf_hz, .period_s = period_s};
         s->fallback_mode = (uint8_t)p->ppc_fallback;
         c->widen_r = s->fallback_mode == PMA_PPC_FALLBACK_WIDEN ? p->ppc_widen_r : 0.0f;
         /* a clamp run as long as the one the monitor calls lost (and ppc.fallback 0 faults) */

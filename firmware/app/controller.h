@@ -10,6 +10,7 @@
 #include <stdint.h>
 
 #include "params.h"
+#include "pma/lpf.h"
 #include "pma/mfac.h"
 #include "pma/pid.h"
 #include "pma/ppc.h"
@@ -53,6 +54,9 @@ typedef struct pma_ctrl {
     float period_s, u_min, u_max;
     pma_ref_config_t ref_cfg;
 #if PMA_CTRL_Q16
+    /* option ppc.u_lpf_hz: the law's command low-pass, as below (near the start: the M0 reaches
+     * it without an offset computation on every tick) */
+    pma_lpf_q16_t u_lpf;
     pma_ref_q16_t ref;
     pma_velest_q16_t vel;
     union {
@@ -75,6 +79,7 @@ typedef struct pma_ctrl {
     } c;
     /* PPC's guarantee monitor and fallback (docs/controllers.md, "When the guarantee is lost") */
     pma_mfac_f32_t shadow;  /* MFAC, in charge from the hand-over (ppc.fallback) */
+    pma_lpf_f32_t u_lpf;    /* option ppc.u_lpf_hz: the law's command low-pass (not MFAC's) */
     float play_z_cm;        /* ppc.ref_ff_hyst's play operator: its output z on x_r + lead x_r' [cm] */
 #endif
     uint8_t ppc_ref_vel;    /* option ppc.ref_vel: the law damps x' - x_r' */
@@ -110,6 +115,7 @@ typedef struct pma_ctrl {
 typedef struct pma_ctrl_setup {
     pma_velest_config_t vel;
     pma_ppc_config_t ppc;   /* mode PPC */
+    pma_lpf_config_t u_lpf; /* mode PPC: ppc.u_lpf_hz */
     pma_mfac_config_t mfac; /* mode MFAC, or PPC's fallback (fallback_mode) */
     pma_pid_config_t pid;   /* mode PID */
 } pma_ctrl_setup_t;
@@ -172,7 +178,12 @@ int pma_ctrl_stream_arith(pma_ctrl_t *s, float target_cm);
  *    (z(0) = x_a(0)): +H while x_a rises, -H while it falls. It depends on
  *    the reference alone. Off (0) in the paper's law; PMA_ERR_RANGE for a
  *    negative H or b <= 0, and in Q16.16 PMA_ERR_FIXED_RANGE where H / b does
- *    not fit or the term would round to nothing. */
+ *    not fit or the term would round to nothing.
+ *  - ppc.u_lpf_hz: the law's output (with the feedforwards, after its clamp)
+ *    through a first-order low-pass at that cut-off (pma/lpf.h), primed by
+ *    the first step; the law, its flags and its feedforward integrator are
+ *    the unfiltered law's. MFAC's output after a hand-over is not filtered.
+ *    Off (0) in the paper's law. */
 int pma_ctrl_start(pma_ctrl_t *s, const pma_params_t *p, float period_s);
 
 /* One step at control time t_s with position x_cm; openloop_u is the live

@@ -38,6 +38,7 @@ int pma_ctrl_init_arith(pma_ctrl_t *s, const pma_ctrl_setup_t *su)
     switch (s->mode) {
     case PMA_CTRL_MODE_PPC:
         CHECK(pma_ppc_init_f32(&s->c.ppc, &su->ppc));
+        CHECK(pma_lpf_init_f32(&s->u_lpf, &su->u_lpf));
         return s->fallback_mode != PMA_PPC_FALLBACK_NONE ? pma_mfac_init_f32(&s->shadow, &su->mfac)
                                                           : PMA_OK;
     case PMA_CTRL_MODE_MFAC: return pma_mfac_init_f32(&s->c.mfac, &su->mfac);
@@ -94,6 +95,7 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
                 }
             }
             CHECK(pma_ppc_step_ext_f32(&s->c.ppc, t_s, x_law_cm, v_law_cm_s, o->xr_cm, u_ref, &out));
+            out = pma_lpf_step_f32(&s->u_lpf, out);   /* option ppc.u_lpf_hz (off: out itself) */
             o->flags = s->c.ppc.out.flags;
             o->internal1 = s->c.ppc.out.lambda1_cm;
             o->internal2 = s->c.ppc.out.lambda2_cm_s;

@@ -66,6 +66,7 @@ int pma_ctrl_init_arith(pma_ctrl_t *s, const pma_ctrl_setup_t *su)
         CHECK(to_q16(s->hyst_cm, &s->q_hyst_cm));
         if (s->hyst_u_per_cm != 0.0f && (s->q_hyst_u_per_cm == 0 || s->q_hyst_cm == 0)) return PMA_ERR_FIXED_RANGE;
         CHECK(pma_ppc_init_q16(&s->c.ppc, &su->ppc));
+        CHECK(pma_lpf_init_q16(&s->u_lpf, &su->u_lpf));
         return s->fallback_mode != PMA_PPC_FALLBACK_NONE ? pma_mfac_init_q16(&s->shadow, &su->mfac)
                                                           : PMA_OK;
     case PMA_CTRL_MODE_MFAC: return pma_mfac_init_q16(&s->c.mfac, &su->mfac);
@@ -118,22 +119,38 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
     return pma_ctrl_step_q16(s, pma_q16_from_f32(t_s), pma_q16_from_f32(x_cm), openloop_u, &uq, u);
 }
 
+/* The step's error return: its outputs and TELEM_D's signals 0, written only on this cold path
+ * (every path that returns PMA_OK writes them) */
+static int step_failed(int rc, pma_ctrl_t *s, pma_q16_t *u_q16, float *u)
+{
+    s->q_out.internal1 = s->q_out.internal2 = 0;
+    *u_q16 = 0;
+    if (u != NULL) *u = 0.0f;
+    return rc;
+}
+
+#define STEP_CHECK(expr)                                          \
+    do {                                                          \
+        int rc_ = (expr);                                         \
+        if (rc_ != PMA_OK) return step_failed(rc_, s, u_q16, u); \
+    } while (0)
+
 int pma_ctrl_step_q16(pma_ctrl_t *s, pma_q16_t t, pma_q16_t x, float openloop_u, pma_q16_t *u_q16,
                       float *u)
 {
-    if (s == NULL || u_q16 == NULL) return PMA_ERR_NULL;
-    if (u != NULL) *u = 0.0f;
-    *u_q16 = 0;
+    if (s == NULL || u_q16 == NULL) {
+        if (u != NULL) *u = 0.0f;
+        return PMA_ERR_NULL;
+    }
     /* Q16.16 time ends at 32767 s (9.1 h): past it the step refuses, and the supervisor
      * faults CONTROLLER (the output goes safe), rather than the reference freezing */
-    if (t >= PMA_CTRL_Q16_T_END) return PMA_ERR_FIXED_RANGE;
+    if (t >= PMA_CTRL_Q16_T_END) return step_failed(PMA_ERR_FIXED_RANGE, s, u_q16, u);
     pma_ctrl_out_q16_t *o = &s->q_out;
     o->t_s = t;
     s->out.flags = 0;
     s->out.barrier = 0;
-    o->internal1 = o->internal2 = 0;
-    CHECK(pma_ref_eval_q16(&s->ref, t, &o->xr_cm, &o->xr_dot_cm_s));
-    CHECK(pma_velest_step_q16(&s->vel, x, &o->v_cm_s));
+    STEP_CHECK(pma_ref_eval_q16(&s->ref, t, &o->xr_cm, &o->xr_dot_cm_s));
+    STEP_CHECK(pma_velest_step_q16(&s->vel, x, &o->v_cm_s));
     o->e_cm = pma_q16_ssub(x, o->xr_cm);
 
     pma_q16_t out = 0;
@@ -163,7 +180,8 @@ int pma_ctrl_step_q16(pma_ctrl_t *s, pma_q16_t t, pma_q16_t x, float openloop_u,
                     u_ref = pma_q16_sadd(u_ref, hyst);
                 }
             }
-            CHECK(pma_ppc_step_ext_q16(&s->c.ppc, t, x_law, v_law, o->xr_cm, u_ref, &out));
+            STEP_CHECK(pma_ppc_step_ext_q16(&s->c.ppc, t, x_law, v_law, o->xr_cm, u_ref, &out));
+            out = pma_lpf_step_q16(&s->u_lpf, out);   /* as controller_f32.c */
             flags = s->c.ppc.out.flags;
             o->internal1 = s->c.ppc.out.lambda1_cm;
             o->internal2 = s->c.ppc.out.lambda2_cm_s;
@@ -174,11 +192,11 @@ int pma_ctrl_step_q16(pma_ctrl_t *s, pma_q16_t t, pma_q16_t x, float openloop_u,
             pma_ctrl_monitor_lost(s, pma_q16_to_f32(t), flags);
         }
         if (s->fallback_active && !was_fallback) {   /* as controller_f32.c */
-            CHECK(pma_mfac_take_over_q16(&s->shadow, pma_q16_sadd(s->c.ppc.ff_init, u_ref)));
+            STEP_CHECK(pma_mfac_take_over_q16(&s->shadow, pma_q16_sadd(s->c.ppc.ff_init, u_ref)));
         }
         /* as controller_f32.c: the fallback's MFAC from the tick of the hand-over */
         if (s->fallback_active) {
-            CHECK(pma_mfac_step_q16(&s->shadow, x, next_reference(s, t), &out));
+            STEP_CHECK(pma_mfac_step_q16(&s->shadow, x, next_reference(s, t), &out));
             flags = s->shadow.flags | PMA_CTRL_FLAG_FALLBACK;
             o->internal1 = phi_q16(s->shadow.phi_q24);   /* TELEM_D as in mode MFAC */
             o->internal2 = s->shadow.u1;
@@ -188,18 +206,19 @@ int pma_ctrl_step_q16(pma_ctrl_t *s, pma_q16_t t, pma_q16_t x, float openloop_u,
     }
     case PMA_CTRL_MODE_MFAC:
         /* MFAC's law uses the reference of the next sample, y*(k+1) */
-        CHECK(pma_mfac_step_q16(&s->c.mfac, x, next_reference(s, t), &out));
+        STEP_CHECK(pma_mfac_step_q16(&s->c.mfac, x, next_reference(s, t), &out));
         flags = s->c.mfac.flags;
         o->internal1 = phi_q16(s->c.mfac.phi_q24);
         o->internal2 = s->c.mfac.u1;
         break;
     case PMA_CTRL_MODE_PID:
-        CHECK(pma_pid_step_q16(&s->c.pid, o->xr_cm, x, &out));
+        STEP_CHECK(pma_pid_step_q16(&s->c.pid, o->xr_cm, x, &out));
         flags = s->c.pid.flags;
         o->internal1 = q32_to_q16(s->c.pid.i_q32);
         o->internal2 = s->c.pid.d;
         break;
     case PMA_CTRL_MODE_OPEN_LOOP: {
+        o->internal1 = o->internal2 = 0;   /* (every other mode writes both) */
         /* ctrl.openloop_u is live and float: clamped in float, as the float build does */
         const float ol = pma_isfinite_f32(openloop_u)
                              ? (openloop_u < s->u_min ? s->u_min : (openloop_u > s->u_max ? s->u_max : openloop_u))
@@ -210,6 +229,7 @@ int pma_ctrl_step_q16(pma_ctrl_t *s, pma_q16_t t, pma_q16_t x, float openloop_u,
         return PMA_OK;
     }
     default:
+        o->internal1 = o->internal2 = 0;
         break;
     }
     s->out.flags = flags;

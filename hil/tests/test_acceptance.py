@@ -147,11 +147,22 @@ def test_case3_pid_runs_for_comparison(nominal_runs):
 
 
 def test_smaller_tu_enters_the_band_sooner(runs):
-    a, _ = runs("case2a")
-    b, _ = runs("case2b")
+    """2b (t_u 2 s) enters the band no later than 2a (t_u 6 s). Into w1 itself both come within
+    0.2 s, while the input sits at its limit and the rig's own motion decides (the same tick, or
+    2b a tick or two ahead); where the funnel decides, 2b is strictly sooner: its error first
+    comes within w1 / 10."""
+    a, out_a = runs("case2a")
+    b, out_b = runs("case2b")
     assert (a["controllers"]["ppc"]["t_u_s"], b["controllers"]["ppc"]["t_u_s"]) == (6.0, 2.0)
     assert not acceptance.band_entry_failures(a, b, feasible=True)      # the shipped tasks are
-    assert b["controllers"]["ppc"]["time_to_band_s"] < a["controllers"]["ppc"]["time_to_band_s"]   # strictly, here
+
+    def first_within_tenth(summary: dict[str, Any], out: Any) -> float:
+        sig = np.load(out / "signals.npz")
+        inside = np.flatnonzero(np.abs(sig["ppc__e_cm"]) < summary["controllers"]["ppc"]["w1_cm"] / 10.0)
+        assert len(inside), "never within w1 / 10"
+        return float(sig["ppc__t_s"][inside[0]])
+    ta, tb = first_within_tenth(a, out_a), first_within_tenth(b, out_b)
+    assert tb < ta, (tb, ta)
 
 
 @pytest.mark.parametrize("case", ["case1", "case2a", "case2b", "case3", "load_change", "constraint_approach"])

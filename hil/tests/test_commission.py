@@ -39,6 +39,7 @@ from pmactl.commission_rules import (
 )
 
 TASK = Task(w1_cm=0.2, t_u_s=2.0, x_min_cm=-3.0, x_max_cm=0.0, x_start_cm=-2.0)
+NOISY_CM = 0.005   # a sensor whose noise through the law moves the input more than 3.5x the need
 
 
 # ------------------------------------------------------------------ the rules --
@@ -362,23 +363,70 @@ def test_derive_places_the_observer_and_reports_the_loop_with_it(theta):
     assert p["vel.fc_hz"] == pytest.approx(min(max(fc, rules.FC_MIN_HZ), rules.FC_MAX_HZ), abs=0.006)
     args = (f["k_v_u_per_cm_s"], f["k_p_per_s"], rules.FF_PER_KP * f["k_p_per_s"])
     plant = (f["gain_cm_per_u"], f["tau_s"], f["theta_eff_s"])
-    again = law_margins(*args, p["vel.fc_hz"], *plant)
+    # the command's low-pass (none, or between FU_PER_FC_MIN and _MAX x the observer's bandwidth) in
+    # the loop as built
+    fu = p["ppc.u_lpf_hz"] / p["vel.fc_hz"]
+    assert fu == 0.0 or rules.FU_PER_FC_MIN - 1e-3 <= fu <= rules.FU_PER_FC_MAX + 1e-3
+    again = law_margins(*args, p["vel.fc_hz"], *plant, p["ppc.u_lpf_hz"])
     assert f["with_observer_gain_margin"] == pytest.approx(again["gain_margin"], rel=1e-3)
     assert f["with_observer_phase_margin_deg"] == pytest.approx(again["phase_margin_deg"], abs=0.1)
-    slower = law_margins(*args, p["vel.fc_hz"] / 2.0, *plant)
+    slower = law_margins(*args, p["vel.fc_hz"] / 2.0, *plant, p["ppc.u_lpf_hz"])
     assert slower["gain_margin"] < f["with_observer_gain_margin"] < d.margins["gain_margin"]
     assert slower["phase_margin_deg"] < f["with_observer_phase_margin_deg"] < d.margins["phase_margin_deg"]
 
 
-def test_law_noise_rate_is_the_mean_input_change_that_white_noise_makes():
-    """law_noise_rate against white Gaussian noise through the law's recursion, tick by tick: the
-    mean |u_k - u_(k-1)| per period, within the sample mean's spread; linear in the noise, and
-    about the square of the observer's bandwidth (its velocity's change per tick)."""
+@pytest.mark.parametrize("noise_cm", [0.0002, 0.0015, NOISY_CM])
+def test_the_commands_low_pass_only_where_the_noise_would_chatter(noise_cm):
+    """The command's low-pass (ppc.u_lpf_hz) where, through the tightest loop without it, the
+    sensor's noise would move the input more than CHATTER_WARN_PER_NEED x what the reference needs:
+    then the highest corner from FU_PER_FC_MAX x the observer's bandwidth down in steps of FU_STEP
+    (to FU_PER_FC_MIN x) whose loop, shaped with its lag in the margins, brings the noise within
+    that; the loop looser than without it, still keeping the margins. Below that, none: the loop
+    is the unfiltered tightest, with nothing lost. MFAC's set is the same either way (it has no
+    low-pass)."""
+    d = derive(_noisy(noise_cm), _task(0.05, None))
+    f, p = d.figures, d.params
+    bound = rules.CHATTER_WARN_PER_NEED * f["need_input_rate_u_per_s"]
+    quiet = derive(_noisy(0.0), _task(0.05, None))          # no noise: never filtered
+    assert quiet.params["ppc.u_lpf_hz"] == 0.0
+    assert {k: v for k, v in p.items() if k.startswith("mfac.")} == \
+        {k: v for k, v in quiet.params.items() if k.startswith("mfac.")}
+    if f["noise_input_rate_unfiltered_u_per_s"] <= bound:
+        assert noise_cm == 0.0002                            # the quiet sensor
+        assert p["ppc.u_lpf_hz"] == 0.0
+        assert f["tau_c_s"] == quiet.figures["tau_c_s"] and p["ppc.a_cm_s"] == quiet.params["ppc.a_cm_s"]
+        assert f["noise_input_rate_u_per_s"] == f["noise_input_rate_unfiltered_u_per_s"]
+        return
+    assert noise_cm > 0.0002
+    fu = p["ppc.u_lpf_hz"] / p["vel.fc_hz"]
+    assert rules.FU_PER_FC_MIN - 1e-3 <= fu <= rules.FU_PER_FC_MAX + 1e-3
+    assert f["tau_c_s"] > quiet.figures["tau_c_s"] and _as_built_keeps_margins(f)
+    assert f["noise_input_rate_u_per_s"] < f["noise_input_rate_unfiltered_u_per_s"]
+    without = law_margins(f["k_v_u_per_cm_s"], f["k_p_per_s"], rules.FF_PER_KP * f["k_p_per_s"],
+                          p["vel.fc_hz"], f["gain_cm_per_u"], f["tau_s"], f["theta_eff_s"])
+    assert without["phase_margin_deg"] > f["with_observer_phase_margin_deg"]
+    if f["noise_input_rate_u_per_s"] <= bound:
+        # the highest corner that does: one step higher (where there is one) does not
+        if fu < rules.FU_PER_FC_MAX - 1e-3:
+            higher = min(fu / rules.FU_STEP, rules.FU_PER_FC_MAX)
+            shape, _, fc = rules._tightest_shape(f["loop_gain_cm_per_u"], f["tau_s"], f["theta_eff_s"], 1e-3, higher)
+            assert rules._noise_rate(shape, fc, 1e-3, noise_cm, higher) > bound
+    else:
+        assert fu == pytest.approx(rules.FU_PER_FC_MIN, abs=1e-3)   # the lowest corner, still above
+
+
+@pytest.mark.parametrize("fu", [0.0, 15.0])
+def test_law_noise_rate_is_the_mean_input_change_that_white_noise_makes(fu):
+    """law_noise_rate against white Gaussian noise through the law's recursion, tick by tick (with
+    the command's low-pass ppc.u_lpf_hz at fu as pma/lpf.h runs it, or none): the mean
+    |u_k - u_(k-1)| per period, within the sample mean's spread; linear in the noise, and about the
+    square of the observer's bandwidth (its velocity's change per tick) without the low-pass."""
     k_v, k_p, k_ff, fc, period, sigma = 2.5, 8.0, 240.0, 15.0, 1e-3, 0.002
     rng = np.random.default_rng(3)
     x = rng.normal(0.0, sigma, 200_000)
     p = math.exp(-2.0 * math.pi * fc * period)
-    x_hat = v_hat = u_ff = u_last = 0.0
+    k_u = 1.0 - math.exp(-2.0 * math.pi * fu * period) if fu > 0.0 else 1.0
+    x_hat = v_hat = u_ff = u_last = y = 0.0
     changes = np.empty(x.size)
     for k, xk in enumerate(x):
         r = xk - (x_hat + period * v_hat)
@@ -386,14 +434,20 @@ def test_law_noise_rate_is_the_mean_input_change_that_white_noise_makes():
         v_hat += (1.0 - p) ** 2 / period * r
         u_law = k_v * (k_p * x_hat + v_hat)
         u_ff += k_ff * period * u_law
-        changes[k] = abs(u_law + u_ff - u_last)
-        u_last = u_law + u_ff
+        y += k_u * (u_law + u_ff - y)
+        changes[k] = abs(y - u_last)
+        u_last = y
     simulated = float(np.mean(changes[2000:])) / period      # after the start's transient
-    assert law_noise_rate(k_v, k_p, k_ff, fc, period, sigma) == pytest.approx(simulated, rel=0.02)
-    assert law_noise_rate(k_v, k_p, k_ff, fc, period, 2 * sigma) == pytest.approx(
-        2 * law_noise_rate(k_v, k_p, k_ff, fc, period, sigma), rel=1e-9)
-    ratio = law_noise_rate(k_v, k_p, k_ff, 2 * fc, period, sigma) / law_noise_rate(k_v, k_p, k_ff, fc, period, sigma)
-    assert 3.0 < ratio < 4.5
+    assert law_noise_rate(k_v, k_p, k_ff, fc, period, sigma, fu) == pytest.approx(simulated, rel=0.02)
+    assert law_noise_rate(k_v, k_p, k_ff, fc, period, 2 * sigma, fu) == pytest.approx(
+        2 * law_noise_rate(k_v, k_p, k_ff, fc, period, sigma, fu), rel=1e-9)
+    if fu == 0.0:
+        ratio = (law_noise_rate(k_v, k_p, k_ff, 2 * fc, period, sigma)
+                 / law_noise_rate(k_v, k_p, k_ff, fc, period, sigma))
+        assert 3.0 < ratio < 4.5
+    else:   # the low-pass at the observer's bandwidth: the noise's roll-off second-order
+        assert law_noise_rate(k_v, k_p, k_ff, fc, period, sigma, fu) < 0.3 * law_noise_rate(
+            k_v, k_p, k_ff, fc, period, sigma)
 
 
 def _noisy(noise_cm: float) -> Measured:
@@ -414,11 +468,11 @@ def test_a_noise_limit_slows_the_observer_until_its_noise_moves_the_input_no_mor
     steps of FC_NOISE_STEP, the loop loosening with it to keep the margins, until it does not: the
     first step down that meets the bound. Without one, the observer stays where the margins put
     it and the report warns."""
-    free = derive(_noisy(0.003), _task(0.05, None))      # no bound: the margins' observer
-    assert free.params["vel.fc_hz"] == derive(_noisy(0.003), _task(0.0)).params["vel.fc_hz"]
+    free = derive(_noisy(NOISY_CM), _task(0.05, None))      # no bound: the margins' observer
+    assert free.params["vel.fc_hz"] == derive(_noisy(NOISY_CM), _task(0.0)).params["vel.fc_hz"]
     assert free.figures["noise_limit"] == 0.0
     assert any("chatter" in w and "--noise-limit" in w for w in free.warnings)
-    d = derive(_noisy(0.003), _task(0.05, limit))
+    d = derive(_noisy(NOISY_CM), _task(0.05, limit))
     f, p = d.figures, d.params
     need = abs(p["ppc.ref_ff"]) * 0.05
     assert f["need_input_rate_u_per_s"] == pytest.approx(need, rel=1e-3)
@@ -433,11 +487,13 @@ def test_a_noise_limit_slows_the_observer_until_its_noise_moves_the_input_no_mor
     fc_up = p["vel.fc_hz"] / rules.FC_NOISE_STEP
     if fc_up < free.params["vel.fc_hz"]:
         gain, tau, theta = f["loop_gain_cm_per_u"], f["tau_s"], f["theta_eff_s"]
-        shape, _ = rules._tightest_at(gain, tau, theta, fc_up)
-        assert rules._noise_rate(shape, fc_up, 1e-3, 0.003) > limit * need
+        fu = p["ppc.u_lpf_hz"] / p["vel.fc_hz"]      # with the command's low-pass it chose
+        shape, _ = rules._tightest_at(gain, tau, theta, fc_up, fu)
+        assert rules._noise_rate(shape, fc_up, 1e-3, NOISY_CM, fu) > limit * need
     # the noise the report states is the loop's as derived
     assert f["noise_input_rate_u_per_s"] == pytest.approx(law_noise_rate(
-        f["k_v_u_per_cm_s"], f["k_p_per_s"], p["ppc.ff_gain_per_s"], p["vel.fc_hz"], 1e-3, 0.003), rel=2e-3)
+        f["k_v_u_per_cm_s"], f["k_p_per_s"], p["ppc.ff_gain_per_s"], p["vel.fc_hz"], 1e-3, NOISY_CM,
+        p["ppc.u_lpf_hz"]), rel=2e-3)
     assert not any("chatter" in w for w in d.warnings)
 
 
@@ -464,8 +520,10 @@ def test_a_sensor_too_noisy_for_any_observer_is_said_and_the_margins_stay():
     assert any("chatter" in w and "slowest observer" in w for w in d.warnings)
     assert _as_built_keeps_margins(f)
     fc_down = max(rules.FC_NOISE_STEP * p["vel.fc_hz"], rules.FC_MIN_HZ)
+    fu = p["ppc.u_lpf_hz"] / p["vel.fc_hz"]     # the command's low-pass: at its lowest corner here
+    assert fu == pytest.approx(rules.FU_PER_FC_MIN, abs=1e-3)
     if fc_down < p["vel.fc_hz"]:
-        _, below = rules._tightest_at(f["loop_gain_cm_per_u"], f["tau_s"], f["theta_eff_s"], fc_down)
+        _, below = rules._tightest_at(f["loop_gain_cm_per_u"], f["tau_s"], f["theta_eff_s"], fc_down, fu)
         assert not rules._keeps_margins(below)
 
 

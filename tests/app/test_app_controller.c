@@ -89,6 +89,7 @@ static void test_options_are_off_by_default(void)
     TEST_ASSERT_EQUAL_INT(0, par.ppc_ref_vel);
     TEST_ASSERT_EQUAL_INT(0, par.ppc_obs_pos);
     TEST_ASSERT_EQUAL_FLOAT(0.0f, par.ppc_ref_ff);
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, par.ppc_u_lpf_hz);
 }
 
 static void test_obs_pos_needs_the_tracking_observer(void)
@@ -252,6 +253,47 @@ static void test_ref_ff_hyst_adds_a_play_operator_on_the_reference(void)
 #endif
 }
 
+/* ppc.u_lpf_hz: two slots on the same noisy samples, one with the command's low-pass. The law
+ * does not see the filter (its feedforward integrator integrates the unfiltered law), so the
+ * filtered slot's output is exactly the low-pass of the other's, primed by its first step
+ * (pma/lpf.h), and moves the valve far less. A negative cut-off is refused at START. */
+static void test_u_lpf_filters_the_laws_command(void)
+{
+    const float fu = 10.0f;
+    sine_params(&par, 1, 1, 1);
+    par.vel_fc_hz = 30.0f;
+    par.ctrl_u_min = -5000.0f;
+    par.ctrl_u_max = 5000.0f;
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ctrl_start(&ctl_off, &par, PERIOD_S));
+    par.ppc_u_lpf_hz = fu;
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ctrl_start(&ctl_on, &par, PERIOD_S));
+    const double k_u = 1.0 - exp(-2.0 * 3.14159265358979 * fu * PERIOD_S);
+    uint32_t seed = 11u;
+    double y = 0.0, tv_off = 0.0, tv_on = 0.0, max_dev = 0.0;
+    float last_off = 0.0f, last_on = 0.0f;
+    for (int k = 0; k < 3000; ++k) {
+        const float t_s = (float)k * PERIOD_S;
+        const float x = sine_cm(t_s) + 0.002f * (float)test_rand_uniform(&seed);
+        float u_off, u_on;
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ctrl_step(&ctl_off, t_s, x, 0.0f, &u_off));
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ctrl_step(&ctl_on, t_s, x, 0.0f, &u_on));
+        y = (k == 0) ? u_off : y + k_u * (u_off - y);
+        max_dev = fmax(max_dev, fabs(u_on - y));
+        if (k > 0) {
+            tv_off += fabsf(u_off - last_off);
+            tv_on += fabsf(u_on - last_on);
+        }
+        last_off = u_off;
+        last_on = u_on;
+    }
+    printf("u_lpf: max |u - lpf(u_law)| %.2e, total variation %.1f filtered against %.1f\n", max_dev,
+           tv_on, tv_off);
+    TEST_ASSERT_TRUE(max_dev < 2e-3);
+    TEST_ASSERT_TRUE(tv_on < 0.5 * tv_off);
+    par.ppc_u_lpf_hz = -1.0f;
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_RANGE, pma_ctrl_start(&ctl_on, &par, PERIOD_S));
+}
+
 /* Q16.16 time ends at 32767 s: the Q16.16 slot refuses a step past it (the application then
  * faults CONTROLLER); float goes on. */
 static void test_time_beyond_the_fixed_point_range(void)
@@ -277,6 +319,7 @@ int main(void)
     RUN_TEST(test_obs_pos_takes_the_error_from_the_observer);
     RUN_TEST(test_ref_ff_adds_the_maps_input_for_the_reference_ahead);
     RUN_TEST(test_ref_ff_hyst_adds_a_play_operator_on_the_reference);
+    RUN_TEST(test_u_lpf_filters_the_laws_command);
     RUN_TEST(test_time_beyond_the_fixed_point_range);
     return UNITY_END();
 }

@@ -7,7 +7,7 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
-from typing import IO, TYPE_CHECKING
+from typing import IO, TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -55,7 +55,7 @@ def text(r: Result) -> list[str]:
         f"(tau_c {f['tau_c_s'] / f['theta_eff_s']:.2f} theta_eff); as a PID alone "
         f"phase margin {mg['phase_margin_deg']:.0f} deg, gain margin {mg['gain_margin']:.1f}, "
         f"delay margin {1000 * mg['delay_margin_s']:.0f} ms at {mg['crossover_rad_s']:.1f} rad/s",
-        f"loop as built, with the velocity observer at {d.params['vel.fc_hz']:g} Hz: phase margin "
+        f"loop as built, with the velocity observer at {d.params['vel.fc_hz']:g} Hz{_lpf(d.params)}: phase margin "
         f"{f['with_observer_phase_margin_deg']:.0f} deg, gain margin {f['with_observer_gain_margin']:.1f}, "
         f"delay margin {1000 * f['with_observer_delay_margin_s']:.0f} ms (the rule keeps "
         f"{PM_MIN_DEG:g} deg and {GM_MIN:g})",
@@ -88,17 +88,25 @@ def _early_lag(f: dict[str, float]) -> str:
     return f" (the early parts' lag; the fits, stretched by a slow tail, say {1000 * f['tau_fit_s']:.1f} ms)"
 
 
+def _lpf(params: dict[str, Any]) -> str:
+    """The command's low-pass in the loop as built, where commissioning set one."""
+    fu = float(params.get("ppc.u_lpf_hz", 0.0))
+    return f" and the command's low-pass at {fu:g} Hz" if fu > 0 else ""
+
+
 def _noise_bound(f: dict[str, float]) -> str:
     """What the sensor's noise does to the input against the need, and the bound the user set
     (figures' noise_limit; 0: none)."""
     noise, need, limit = f["noise_input_rate_u_per_s"], f["need_input_rate_u_per_s"], f["noise_limit"]
     if need <= 0:
         return " (a set-point task: nothing to weigh it against)"
+    unfiltered = f.get("noise_input_rate_unfiltered_u_per_s", noise)
+    lpf = f"; {unfiltered / need:.2f}x without the command's low-pass" if unfiltered > noise else ""
     if limit > 0:
         held = "within" if noise <= limit * need else "above even at the slowest observer the margins allow:"
-        return f" ({noise / need:.2f}x; --noise-limit {limit:g}: {held} it)"
+        return f" ({noise / need:.2f}x{lpf}; --noise-limit {limit:g}: {held} it)"
     loud = " (expect the valve to chatter: see the warning)" if noise > CHATTER_WARN_PER_NEED * need else ""
-    return f" ({noise / need:.2f}x; no --noise-limit){loud}"
+    return f" ({noise / need:.2f}x{lpf}; no --noise-limit){loud}"
 
 
 def write(r: Result, out: Path, proto: Protocol, node: int) -> list[Path]:

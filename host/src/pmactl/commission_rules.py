@@ -21,7 +21,10 @@ u = -K_v ((x' - x_r') + K_p e) plus the steady-state feedforward integrator
 (u_ff' = k_ff u_law), i.e. the PID  K_v (K_p + k_ff) + K_v s + K_v K_p k_ff / s. The law sees the
 position and velocity through the tracking observer, placed at FC_PER_CROSSOVER x the crossover of
 the tightest loop the rule allows; the margins of the loop with that observer in it (law_margins,
-"as built") decide, and are reported beside the PID's.
+"as built") decide, and are reported beside the PID's. Where the sensor's noise through that loop would
+move the input more than CHATTER_WARN_PER_NEED times what the reference needs, the law's command goes
+through a first-order low-pass (ppc.u_lpf_hz): the highest corner, down to the observer's bandwidth,
+that keeps the noise within that, in the loop as built too.
 The reference feedforward takes the static map's slope, and its hysteresis term (_hysteresis_ff) the
 branch of the map's loop the reference is on; MFAC's reset threshold is a tenth of the measured gain.
 """
@@ -51,6 +54,17 @@ SPEEDUP_MAX = 5.0            # tau_c >= tau / 5: the closed loop at most 5x fast
 # is at most 2 atan(1 / FC_PER_CROSSOVER): 14 deg here, 28 deg at 4x (docs/commissioning.md, "The rules")
 FC_PER_CROSSOVER = 8.0
 FC_MIN_HZ, FC_MAX_HZ = 2.0, 50.0
+# the command's low-pass (ppc.u_lpf_hz) in units of the observer's bandwidth: the law passes the
+# sensor's noise to the input with a first-order roll-off above the observer's bandwidth, and the
+# low-pass makes it second-order. At the observer's bandwidth it cuts what white noise moves the
+# input to about a fifth (law_noise_rate) for atan(1 / FC_PER_CROSSOVER) = 7 deg at the tightest
+# loop's crossover, which the margins as built include: the loop comes out a little looser. So it
+# is used only where the noise through the loop without it would move the input more than
+# CHATTER_WARN_PER_NEED (or the user's noise limit) times what the reference needs, where the report
+# would warn of chatter, and no lower than that needs: from FU_PER_FC_MAX x the observer's
+# bandwidth down in steps of FU_STEP to FU_PER_FC_MIN x, the first corner whose loop (shaped with
+# it) keeps the noise within that (docs/commissioning.md, "The rules")
+FU_PER_FC_MAX, FU_PER_FC_MIN, FU_STEP = 4.0, 1.0, 0.8
 # The sensor's noise through the law as built (law_noise_rate) moves the input; where it moves it
 # more than CHATTER_WARN_PER_NEED times the rate the task's reference needs (|ppc.ref_ff| x the
 # reference's mean speed), the report warns that the valve will chatter. The user may bound it
@@ -246,35 +260,43 @@ def loop_margins(kc: float, ki: float, kd: float, gain: float, tau_s: float, the
 
 
 def law_margins(k_v: float, k_p: float, k_ff: float, fc_hz: float, gain: float, tau_s: float,
-                theta_s: float) -> dict[str, float]:
+                theta_s: float, fu_hz: float = 0.0) -> dict[str, float]:
     """The margins (as loop_margins) of the paper's law in its small-signal form with the options
     commissioning sets (ppc.obs_pos, ppc.ref_vel: the law sees the tracking observer's position
     and velocity) on the FOPDT: u_law = K_v (K_p x_hat + v_hat), u = (1 + k_ff / s) u_law. The
     observer with both poles at -w_o = -2 pi fc passes the position as (2 w_o s + w_o^2) / (s + w_o)^2
     and the velocity as s w_o^2 / (s + w_o)^2. Without it (fc infinite) this is loop_margins' PID
-    K_v (K_p + k_ff) + K_v s + K_v K_p k_ff / s. Units: k_v in input units per cm/s, k_p and k_ff
-    in 1/s, fc_hz in Hz, gain in cm per input unit, tau_s and theta_s in s."""
+    K_v (K_p + k_ff) + K_v s + K_v K_p k_ff / s. With fu_hz > 0 the command goes through the
+    low-pass ppc.u_lpf_hz, w_u / (s + w_u) with w_u = 2 pi fu. Units: k_v in input units per cm/s,
+    k_p and k_ff in 1/s, fc_hz and fu_hz in Hz, gain in cm per input unit, tau_s and theta_s in s."""
     s = 1j * _W
     wo = 2.0 * math.pi * fc_hz
     h_x = (2.0 * wo * s + wo * wo) / (s + wo) ** 2
     h_v = s * wo * wo / (s + wo) ** 2
     law = k_v * (1.0 + k_ff / s) * (k_p * h_x + h_v)
+    if fu_hz > 0.0:
+        wu = 2.0 * math.pi * fu_hz
+        law = law * wu / (s + wu)
     return _margins(law * gain * np.exp(-theta_s * s) / (tau_s * s + 1.0))
 
 
-def law_noise_rate(k_v: float, k_p: float, k_ff: float, fc_hz: float, period_s: float, noise_cm: float) -> float:
+def law_noise_rate(k_v: float, k_p: float, k_ff: float, fc_hz: float, period_s: float, noise_cm: float,
+                   fu_hz: float = 0.0) -> float:
     """The mean |du/dt| [input units per s] that white position noise of standard deviation
     noise_cm [cm] puts on the law's input u, ticked at period_s: the firmware's tracking observer
     (pma/velest.h: both poles at exp(-2 pi fc T)) feeding the law's small-signal form with the
     options commissioning sets (law_margins: u_law = K_v (K_p x_hat + v_hat), u = u_law plus its
     integral at k_ff). With h the impulse response from x to u, a tick's change of u has the
     standard deviation noise_cm ||h_k - h_{k-1}||, and a Gaussian's mean magnitude is sqrt(2 / pi)
-    of that. Units as law_margins'."""
+    of that. With fu_hz > 0, u through the command's low-pass as the firmware runs it (pma/lpf.h:
+    y += (1 - exp(-2 pi fu T)) (u - y)). Units as law_margins'."""
     p = math.exp(-2.0 * math.pi * fc_hz * period_s)
     ga, gb = 1.0 - p * p, (1.0 - p) ** 2
-    # until the observer's response has decayed (p^n below 1e-9; the integral's part decays with it)
-    n = int(math.ceil(30.0 / (1.0 - p))) + 8
-    x_hat = v_hat = u_ff = 0.0
+    k_u = -math.expm1(-2.0 * math.pi * fu_hz * period_s) if fu_hz > 0.0 else 1.0
+    # until the observer's and the low-pass' responses have decayed (below 1e-9; the integral's part
+    # decays with them)
+    n = int(math.ceil(30.0 / min(1.0 - p, k_u))) + 8
+    x_hat = v_hat = u_ff = y = 0.0
     u = np.empty(n)
     for k in range(n):
         r = (1.0 if k == 0 else 0.0) - (x_hat + period_s * v_hat)
@@ -282,7 +304,8 @@ def law_noise_rate(k_v: float, k_p: float, k_ff: float, fc_hz: float, period_s: 
         v_hat += gb / period_s * r
         u_law = k_v * (k_p * x_hat + v_hat)
         u_ff += k_ff * period_s * u_law
-        u[k] = u_law + u_ff
+        y += k_u * (u_law + u_ff - y)
+        u[k] = y
     du = np.diff(u, prepend=0.0)
     return math.sqrt(2.0 / math.pi) * noise_cm * float(np.sqrt(np.sum(du * du))) / period_s
 
@@ -403,41 +426,43 @@ def _observer_hz(shape: _Shape, theta_eff: float, period_s: float) -> float:
 
 
 def _shaped(gain: float, tau: float, theta_eff: float, fc_hz: float,
-            tau_c_per_theta: float) -> tuple[_Shape, dict[str, float]]:
+            tau_c_per_theta: float, fu_per_fc: float = 0.0) -> tuple[_Shape, dict[str, float]]:
     """_shape with the observer at fc_hz: the shape and the margins of the law's loop as built
     (law_margins)."""
     shape = _shape(gain, tau, theta_eff, tau_c_per_theta)
-    return shape, law_margins(shape.k_v, shape.k_p, FF_PER_KP * shape.k_p, fc_hz, gain, tau, theta_eff)
+    return shape, law_margins(shape.k_v, shape.k_p, FF_PER_KP * shape.k_p, fc_hz, gain, tau, theta_eff,
+                              fu_per_fc * fc_hz)
 
 
 def _keeps_margins(margins: dict[str, float]) -> bool:
     return margins["phase_margin_deg"] >= PM_MIN_DEG and margins["gain_margin"] >= GM_MIN
 
 
-def _tightest_shape(gain: float, tau: float, theta_eff: float,
-                    period_s: float) -> tuple[_Shape, dict[str, float], float]:
+def _tightest_shape(gain: float, tau: float, theta_eff: float, period_s: float,
+                    fu_per_fc: float = 0.0) -> tuple[_Shape, dict[str, float], float]:
     """The observer's bandwidth (_observer_hz of the tightest loop the rule allows, tau_c =
     TAU_C_PER_THETA_MIN theta_eff) and _tightest_at that bandwidth. Returns the shape, its margins
     as built and fc [Hz]."""
     fc_hz = _observer_hz(_shape(gain, tau, theta_eff, TAU_C_PER_THETA_MIN), theta_eff, period_s)
-    return (*_tightest_at(gain, tau, theta_eff, fc_hz), fc_hz)
+    return (*_tightest_at(gain, tau, theta_eff, fc_hz, fu_per_fc), fc_hz)
 
 
-def _tightest_at(gain: float, tau: float, theta_eff: float, fc_hz: float) -> tuple[_Shape, dict[str, float]]:
+def _tightest_at(gain: float, tau: float, theta_eff: float, fc_hz: float,
+                 fu_per_fc: float = 0.0) -> tuple[_Shape, dict[str, float]]:
     """The loop with the smallest tau_c / theta_eff in TAU_C_PER_THETA_MIN..MAX whose margins as
     built, with the observer at fc_hz, keep PM_MIN_DEG and GM_MIN (bisection: they grow as tau_c
     does); the most robust (TAU_C_PER_THETA_MAX) where none does. The shape and its margins as
     built."""
-    tight = _shaped(gain, tau, theta_eff, fc_hz, TAU_C_PER_THETA_MIN)
+    tight = _shaped(gain, tau, theta_eff, fc_hz, TAU_C_PER_THETA_MIN, fu_per_fc)
     if _keeps_margins(tight[1]):
         return tight
-    loose = _shaped(gain, tau, theta_eff, fc_hz, TAU_C_PER_THETA_MAX)
+    loose = _shaped(gain, tau, theta_eff, fc_hz, TAU_C_PER_THETA_MAX, fu_per_fc)
     if not _keeps_margins(loose[1]):
         return loose
     lo, hi = TAU_C_PER_THETA_MIN, TAU_C_PER_THETA_MAX
     for _ in range(12):          # to 0.1 % of the range
         mid = 0.5 * (lo + hi)
-        shaped = _shaped(gain, tau, theta_eff, fc_hz, mid)
+        shaped = _shaped(gain, tau, theta_eff, fc_hz, mid, fu_per_fc)
         if _keeps_margins(shaped[1]):
             hi, loose = mid, shaped
         else:
@@ -445,28 +470,51 @@ def _tightest_at(gain: float, tau: float, theta_eff: float, fc_hz: float) -> tup
     return loose
 
 
-def _noise_rate(shape: _Shape, fc_hz: float, period_s: float, noise_cm: float) -> float:
-    return law_noise_rate(shape.k_v, shape.k_p, FF_PER_KP * shape.k_p, fc_hz, period_s, noise_cm)
+def _noise_rate(shape: _Shape, fc_hz: float, period_s: float, noise_cm: float,
+                fu_per_fc: float = 0.0) -> float:
+    return law_noise_rate(shape.k_v, shape.k_p, FF_PER_KP * shape.k_p, fc_hz, period_s, noise_cm,
+                          fu_per_fc * fc_hz)
+
+
+def _low_passed(unfiltered: tuple[_Shape, dict[str, float], float], rate_unfiltered: float, gain: float,
+                tau: float, theta_eff: float, period_s: float, noise_cm: float,
+                bound_u_per_s: float) -> tuple[tuple[_Shape, dict[str, float], float], float]:
+    """The command's low-pass: none where the noise through the tightest loop without it
+    (rate_unfiltered, input units per s) stays within bound_u_per_s (0: no bound); else the
+    highest corner from FU_PER_FC_MAX x the observer's bandwidth down in steps of FU_STEP to
+    FU_PER_FC_MIN x whose tightest loop, shaped with it (its lag in the margins), keeps the noise
+    within the bound, the lowest where none does. Returns that tightest shape (as _tightest_shape)
+    and the corner in units of the observer's bandwidth (0: none)."""
+    if bound_u_per_s <= 0 or rate_unfiltered <= bound_u_per_s:
+        return unfiltered, 0.0
+    fu_per_fc = FU_PER_FC_MAX
+    while True:
+        tightest = _tightest_shape(gain, tau, theta_eff, period_s, fu_per_fc)
+        rate = _noise_rate(tightest[0], tightest[2], period_s, noise_cm, fu_per_fc)
+        if rate <= bound_u_per_s or fu_per_fc <= FU_PER_FC_MIN:
+            return tightest, fu_per_fc
+        fu_per_fc = max(fu_per_fc * FU_STEP, FU_PER_FC_MIN)
 
 
 def _quiet_shape(tightest: tuple[_Shape, dict[str, float], float], gain: float, tau: float, theta_eff: float,
                  period_s: float, noise_cm: float, need_u_per_s: float,
-                 limit: float | None) -> tuple[_Shape, dict[str, float], float, float]:
+                 limit: float | None, fu_per_fc: float = 0.0) -> tuple[_Shape, dict[str, float], float, float]:
     """From the tightest shape (_tightest_shape), with a limit (Task.noise_limit; None: none) and
     while the sensor's noise through that loop (law_noise_rate) moves the input more than limit x
     need_u_per_s (the rate the task's reference needs; 0: no bound), the observer FC_NOISE_STEP
     slower and _tightest_at it, down to FC_MIN_HZ but never to a bandwidth at which no loop keeps
-    the margins (the noise does not buy back stability). Returns the shape, its margins as built,
-    fc [Hz] and the noise's rate [input units per s]."""
+    the margins (the noise does not buy back stability); the command's low-pass at fu_per_fc x the
+    observer's bandwidth throughout (0: none). Returns the shape, its margins as built, fc [Hz] and
+    the noise's rate [input units per s]."""
     shape, margins, fc_hz = tightest
-    rate = _noise_rate(shape, fc_hz, period_s, noise_cm)
+    rate = _noise_rate(shape, fc_hz, period_s, noise_cm, fu_per_fc)
     while limit is not None and need_u_per_s > 0 and rate > limit * need_u_per_s and fc_hz > FC_MIN_HZ:
         fc_next = max(FC_NOISE_STEP * fc_hz, FC_MIN_HZ)
-        shape_next, margins_next = _tightest_at(gain, tau, theta_eff, fc_next)
+        shape_next, margins_next = _tightest_at(gain, tau, theta_eff, fc_next, fu_per_fc)
         if _keeps_margins(margins) and not _keeps_margins(margins_next):
             break
         shape, margins, fc_hz = shape_next, margins_next, fc_next
-        rate = _noise_rate(shape, fc_hz, period_s, noise_cm)
+        rate = _noise_rate(shape, fc_hz, period_s, noise_cm, fu_per_fc)
     return shape, margins, fc_hz, rate
 
 
@@ -574,9 +622,18 @@ def derive(m: Measured, task: Task) -> Derivation:
     # 4 Hz and lost the guarantee (docs/commissioning.md, "The rules"). The observer as fast as
     # those margins want, unless the user bounds what the sensor's noise through it may move the
     # input (Task.noise_limit)
-    tightest = _tightest_shape(loop_gain, tau, theta_eff, m.period_s)
+    # The command's low-pass where the noise needs it: where through the tightest loop without it
+    # the sensor's noise would move the input more than the noise limit times what the reference
+    # needs (by default CHATTER_WARN_PER_NEED, where the report would warn of chatter). Its lag
+    # loosens the loop a little (the margins include it), so where the noise is below that the
+    # loop goes without it and loses nothing
+    warn_at = CHATTER_WARN_PER_NEED if task.noise_limit is None else task.noise_limit
+    unfiltered = _tightest_shape(loop_gain, tau, theta_eff, m.period_s, fu_per_fc=0.0)
+    rate_unfiltered = _noise_rate(unfiltered[0], unfiltered[2], m.period_s, m.noise_cm, 0.0)
+    tightest, fu_per_fc = _low_passed(unfiltered, rate_unfiltered, loop_gain, tau, theta_eff, m.period_s,
+                                      m.noise_cm, warn_at * need_rate)
     shape, with_observer, fc_hz, noise_rate = _quiet_shape(tightest, loop_gain, tau, theta_eff, m.period_s,
-                                                          m.noise_cm, need_rate, task.noise_limit)
+                                                          m.noise_cm, need_rate, task.noise_limit, fu_per_fc)
     if not _keeps_margins(with_observer):
         warnings.append(f"no loop keeps a phase margin of {PM_MIN_DEG:g} deg and a gain margin of {GM_MIN:g} on the "
                         "measured lag: the most robust one is used (see its margins)")
@@ -587,9 +644,10 @@ def derive(m: Measured, task: Task) -> Derivation:
     c = 2.0 * w2 * w2 * k_v / math.pi
     u_lo, u_hi = sorted((u_of(m.p_min_kpa), u_of(m.p_max_kpa)))
     u_start = u_of(m.static_map.hold_kpa(x_start))
-    # MFAC's first steps at the integral gain of the tightest loop: the noise limit is the paper's
-    # law's observer's, and MFAC has none
-    mfac = mfac_gains(gain, tau, theta_eff, m.period_s, tightest[0].ki * m.period_s)
+    # MFAC's first steps at the integral gain of the tightest loop: the noise limit and the command's
+    # low-pass are the paper's law's, and MFAC has neither
+    mfac_ki = unfiltered[0].ki
+    mfac = mfac_gains(gain, tau, theta_eff, m.period_s, mfac_ki * m.period_s)
     ref_ff_lead = tau + theta_eff
     hyst_ff, hyst_cm, hyst_kpa = _hysteresis_ff(m, [float(x) for x in xs])
 
@@ -606,7 +664,6 @@ def derive(m: Measured, task: Task) -> Derivation:
     if task.speed_cm_s > v_max:
         warnings.append(f"the reference's speed {task.speed_cm_s:g} cm/s exceeds {v_max:.2f} cm/s: expect |e| "
                         "near w1 and a loss of the guarantee (the fallback to MFAC takes over)")
-    warn_at = CHATTER_WARN_PER_NEED if task.noise_limit is None else task.noise_limit
     if need_rate > 0 and noise_rate > warn_at * need_rate:
         warnings.append(f"the sensor's noise ({m.noise_cm:.5f} cm) moves the input {noise_rate:.1f} units/s "
                         f"with the observer at {fc_hz:.3g} Hz, over {warn_at:g}x what the reference needs "
@@ -653,6 +710,7 @@ def derive(m: Measured, task: Task) -> Derivation:
         "ppc.obs_pos": 1,
         "vel.kind": 1,
         "vel.fc_hz": round(fc_hz, 2),
+        "ppc.u_lpf_hz": round(fu_per_fc * fc_hz, 2),
         "mfac.eta": MFAC_ETA,
         "mfac.mu": MFAC_MU,
         "mfac.rho": MFAC_RHO,
@@ -675,6 +733,7 @@ def derive(m: Measured, task: Task) -> Derivation:
                "with_observer_gain_margin": with_observer["gain_margin"],
                "with_observer_delay_margin_s": with_observer["delay_margin_s"],
                "noise_input_rate_u_per_s": noise_rate, "need_input_rate_u_per_s": need_rate,
+               "noise_input_rate_unfiltered_u_per_s": rate_unfiltered,
                "noise_limit": 0.0 if task.noise_limit is None else task.noise_limit,
                "mfac_k_loop_per_s": mfac.k_loop_per_s,
                "mfac_phase_margin_deg": mfac.margins["phase_margin_deg"],
