@@ -6,10 +6,10 @@
 #include <stddef.h>
 #include "check.h"
 #include "fixed_internal.h"
+#include "pi.h"
 
 #include <math.h>
 
-#define TWO_PI_F 6.28318530717959f
 
 int pma_lpf_validate_config(const pma_lpf_config_t *cfg)
 {
@@ -25,7 +25,7 @@ int pma_lpf_validate_config(const pma_lpf_config_t *cfg)
  * rounding. */
 static float gain(const pma_lpf_config_t *cfg)
 {
-    const float k = cfg->fc_hz > 0.0f ? 1.0f - expf(-TWO_PI_F * cfg->fc_hz * cfg->period_s) : 0.0f;
+    const float k = cfg->fc_hz > 0.0f ? 1.0f - expf(-PMA_TWO_PI_F * cfg->fc_hz * cfg->period_s) : 0.0f;
     return k < 1.0f ? k : 0.0f;
 }
 

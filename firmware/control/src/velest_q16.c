@@ -9,10 +9,10 @@
 #include <stddef.h>
 #include "check.h"
 #include "fixed_internal.h"
+#include "pi.h"
 
 #include <math.h>
 
-#define TWO_PI_F 6.28318530717959f
 #define RES_LIMIT ((int64_t)1 << 46)   /* residual clamp: 16384 cm in Q32 */
 
 /* round(r c / 2^shift) for |r| <= 2^46, 0 <= c < 2^31, 16 < shift < 48,
@@ -32,7 +32,7 @@ int pma_velest_init_q16(pma_velest_q16_t *s, const pma_velest_config_t *cfg)
     s->ready = 0;
     PMA_CHECK(pma_velest_validate_config(cfg));
     if (cfg->period_s >= 2.0f) return PMA_ERR_FIXED_RANGE;
-    const float p = expf(-TWO_PI_F * cfg->fc_hz * cfg->period_s);
+    const float p = expf(-PMA_TWO_PI_F * cfg->fc_hz * cfg->period_s);
     float c1, c2;
     if (cfg->kind == PMA_VELEST_FILTERED_DIFF) {
         c1 = p;
