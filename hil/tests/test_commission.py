@@ -21,7 +21,7 @@ from hil import offline
 from hil import scenario as scn
 from hil.commissioned import before_commissioning
 from hil.offline_bus import OfflineBus
-from pmactl import cli
+from pmactl import cli, commission_report
 from pmactl.client import NodeStateError, PmaNode
 from pmactl.commission import TOUCHED, Commissioning
 from pmactl.commission_rules import (
@@ -461,7 +461,7 @@ def _task(mean_speed: float | None, noise_limit: float | None = 2.0) -> Task:
                 mean_speed_cm_s=mean_speed, noise_limit=noise_limit)
 
 
-@pytest.mark.parametrize("limit", [2.0, 3.5])
+@pytest.mark.parametrize("limit", [1.5, 2.5])
 def test_a_noise_limit_slows_the_observer_until_its_noise_moves_the_input_no_more_than_asked(limit):
     """With a noise limit K (pmactl commission --noise-limit), where the sensor's noise through the
     law would move the input more than K times what the reference needs, the observer comes down in
@@ -578,10 +578,14 @@ def test_mfac_phi1_gives_the_integral_gain():
 @pytest.fixture
 def rig_node(request: pytest.FixtureRequest) -> Any:
     """A freshly wired node on the paper's rig: its sensor and DAC scalings, the actuator's
-    pressure range and the constraints set, nothing else."""
+    pressure range and the constraints set, nothing else. A parameter is the scenario's name, or
+    (name, {sensor property: value}) for another sensor on its rig."""
     assert offline.LIB_PATH.exists(), f"{offline.LIB_PATH} missing: {offline.BUILD_HINT}"
-    name = getattr(request, "param", "case3")
+    name, sensor = getattr(request, "param", "case3"), {}
+    if isinstance(name, tuple):
+        name, sensor = name
     sc = scn.load(name)
+    sc.rig.setdefault("sensor", {}).update(sensor)
     bus = OfflineBus(sc.rig_params(), node_id=1)
     node = PmaNode(bus, node=1, host_heartbeat_s=0.1)
     for k, v in before_commissioning(sc).items():
@@ -637,6 +641,39 @@ def test_commission_refuses_a_disconnected_sensor(rig_node):
     with pytest.raises(CommissionError, match="sensor"):
         Commissioning(node, TASK).run()
     assert _snapshot(node) == before
+
+
+QUIET_SENSOR = {"noise_cm": 0.0, "adc_noise_counts": 0.0}      # a still muscle reads one value at rest
+
+
+@pytest.mark.parametrize("rig_node", [("case3", QUIET_SENSOR)], indirect=True)
+def test_a_sensor_quieter_than_its_adc_takes_the_quantisations_noise(rig_node):
+    """A noise-free sensor on a still muscle reads the same count on every sample at rest: that
+    is not a stuck sensor (the direction step moves it), and the noise the rules take is the ADC's
+    quantisation, one count over sqrt(12), never less."""
+    bus, node = rig_node
+    r = Commissioning(node, TASK).run()
+    m = r.measured
+    count_cm = abs(float(node.get("adc.gain_cm_per_count")))
+    assert m.noise_rest_cm == 0.0 and m.resolution_cm == pytest.approx(count_cm)
+    assert m.noise_cm == pytest.approx(count_cm / math.sqrt(12.0))
+    assert r.derivation.figures["noise_cm"] == m.noise_cm
+    assert "quantisation" in commission_report.text(r)[1]
+    assert node.status().state_name == "IDLE"
+
+
+def test_commission_refuses_a_stuck_sensor(rig_node, monkeypatch):
+    """A sensor that reads the same valid count whatever the pressure (stuck, or a muscle that
+    does not move under a noise-free sensor) is refused, the node left as it was."""
+    bus, node = rig_node
+    count = bus.rig.sensor_counts()
+    monkeypatch.setattr(bus.rig, "sensor_counts", lambda: count)
+    bus.run_for(0.3)
+    before = _snapshot(node)
+    with pytest.raises(CommissionError, match="same value on every sample, at rest and after a pressure step"):
+        Commissioning(node, TASK).run()
+    assert _snapshot(node) == before
+    assert node.status().state_name == "IDLE"
 
 
 def test_commission_refuses_an_actuator_that_does_not_move_the_muscle(rig_node):
@@ -766,10 +803,10 @@ def test_the_harness_commissions_with_the_scenarios_noise_limit():
     sc = scn.load("variants/case3_coarse_sensor")
     assert task_of(sc).noise_limit is None
     free = commission(sc).derivation
-    sc.noise_limit = 2.0
-    assert task_of(sc).noise_limit == 2.0
+    sc.noise_limit = 1.5
+    assert task_of(sc).noise_limit == 1.5
     quiet = commission(sc).derivation
-    assert quiet.figures["noise_limit"] == 2.0 and free.figures["noise_limit"] == 0.0
-    assert free.figures["noise_input_rate_u_per_s"] > 2.0 * free.figures["need_input_rate_u_per_s"]
-    assert quiet.figures["noise_input_rate_u_per_s"] <= 2.0 * quiet.figures["need_input_rate_u_per_s"]
+    assert quiet.figures["noise_limit"] == 1.5 and free.figures["noise_limit"] == 0.0
+    assert free.figures["noise_input_rate_u_per_s"] > 1.5 * free.figures["need_input_rate_u_per_s"]
+    assert quiet.figures["noise_input_rate_u_per_s"] <= 1.5 * quiet.figures["need_input_rate_u_per_s"]
     assert quiet.params["vel.fc_hz"] < free.params["vel.fc_hz"]

@@ -108,6 +108,8 @@ class Commissioning:
         self.p_max = float(node.get("act.p_max_kpa"))
         self.kpa_per_u = float(node.get("act.kpa_per_u"))
         self.period_s = 1.0 / float(node.get("sys.tick_hz"))
+        # one ADC count in cm: the finest position step the loop can see
+        self.resolution_cm = abs(float(node.get("adc.gain_cm_per_count")))
         self.margin_cm = max(0.1, 0.5 * self.task.w1_cm)
         ok = False
         try:
@@ -163,17 +165,24 @@ class Commissioning:
         x_rest = float(np.mean(rest.x_cm))
         # the noise: what a straight line through the samples leaves (a slow creep is no noise)
         t_rest = np.asarray(rest.t_s) - rest.t_s[0]
-        noise = float(np.std(np.asarray(rest.x_cm) - np.polyval(np.polyfit(t_rest, rest.x_cm, 1), t_rest)))
-        if noise == 0.0:
-            raise CommissionError("the position reads the same value on every sample: a stuck or saturated "
-                                  "sensor (check its output and the ADC input)")
-        if noise > NOISE_MAX_CM:
-            raise CommissionError(f"the position noise at rest is {noise:.4f} cm (over {NOISE_MAX_CM} cm): check the "
-                                  "sensor's shielding, ground and target")
+        still = len(set(rest.x_cm)) == 1    # one value on every sample (a line's residue is then ~1e-16, not 0)
+        noise_rest = 0.0 if still else float(
+            np.std(np.asarray(rest.x_cm) - np.polyval(np.polyfit(t_rest, rest.x_cm, 1), t_rest)))
+        if noise_rest > NOISE_MAX_CM:
+            raise CommissionError(f"the position noise at rest is {noise_rest:.4f} cm (over {NOISE_MAX_CM} cm): check "
+                                  "the sensor's shielding, ground and target")
+        # what the loop sees is never quieter than the ADC's quantisation (one count, uniform: its
+        # standard deviation is a count over sqrt(12)); a still muscle on a quiet sensor reads less
+        # at rest, down to one value on every sample, which is not yet a stuck sensor
+        noise = max(noise_rest, self.resolution_cm / math.sqrt(12.0))
         dp = max(0.1 * (self.p_max - self.p_min), 20.0)
         p_move = p0 + dp if p0 + dp <= self.p_max else p0 - dp
         moved = self._hold(p_move, MOVE_S, "direction")
         dx = float(np.mean(moved.x_cm[-len(moved.x_cm) // 5:])) - x_rest
+        if still and set(moved.x_cm) == set(rest.x_cm):
+            raise CommissionError(f"the position reads the same value on every sample, at rest and after a pressure "
+                                  f"step of {p_move - p0:+.0f} kPa: a stuck or saturated sensor (check its output "
+                                  "and the ADC input), or nothing moves (check the air supply and the regulator)")
         if abs(dx) < max(MOVE_MIN_CM, 6.0 * noise):
             raise CommissionError(f"a pressure step of {p_move - p0:+.0f} kPa moved x by {dx:+.4f} cm: nothing moves. "
                                   "Check the air supply, the regulator's command wiring and the dac.* scaling")
@@ -189,7 +198,7 @@ class Commissioning:
         t_rig = self.t_now - t_start
         return Measured(polarity_measured=polarity, noise_cm=noise, static_map=static, steps=steps,
                         period_s=self.period_s, kpa_per_u=self.kpa_per_u, p_min_kpa=self.p_min,
-                        p_max_kpa=self.p_max), t_rig
+                        p_max_kpa=self.p_max, noise_rest_cm=noise_rest, resolution_cm=self.resolution_cm), t_rig
 
     def _static_map(self) -> StaticMap:
         """A staircase on LEVELS pressures over act.p_min..p_max: up from p0 to the top (or to

@@ -44,7 +44,9 @@ def text(r: Result) -> list[str]:
     lines = [
         f"commissioning done in {r.rig_time_s:.1f} s of rig time ({r.wall_s:.1f} s wall)",
         f"wiring: x moves {'with' if m.polarity_measured > 0 else 'against'} the pressure: "
-        f"act.polarity {d.params['act.polarity']:+d}; noise at rest {1e4 * m.noise_cm:.1f} um (1 sigma)",
+        f"act.polarity {d.params['act.polarity']:+d}; noise at rest {1e4 * m.noise_cm:.1f} um (1 sigma)"
+        + (f", the quantisation's: one count of {1e4 * m.resolution_cm:.1f} um over sqrt(12) (measured "
+           f"{1e4 * m.noise_rest_cm:.1f} um)" if m.noise_rest_cm is not None and m.noise_rest_cm < m.noise_cm else ""),
         f"static map: stroke {f['stroke_min_cm']:.3f}..{f['stroke_max_cm']:.3f} cm over "
         f"{min(m.static_map.p_down_kpa):.0f}..{max(m.static_map.p_down_kpa):.0f} kPa; hysteresis "
         f"{f['hysteresis_kpa_at_p0']:.0f} kPa at the preset pressure",

@@ -63,8 +63,10 @@ FC_MIN_HZ, FC_MAX_HZ = 2.0, 50.0
 # CHATTER_WARN_PER_NEED (or the user's noise limit) times what the reference needs, where the report
 # would warn of chatter, and no lower than that needs: from FU_PER_FC_MAX x the observer's
 # bandwidth down in steps of FU_STEP to FU_PER_FC_MIN x, the first corner whose loop (shaped with
-# it) keeps the noise within that (docs/commissioning.md, "The rules")
-FU_PER_FC_MAX, FU_PER_FC_MIN, FU_STEP = 4.0, 1.0, 0.8
+# it) keeps the noise within that (docs/commissioning.md, "The rules"). At half the observer's
+# bandwidth it lags atan(2 / FC_PER_CROSSOVER) = 14 deg at the tightest loop's crossover; it stops
+# there because below it the margins loosen the loop faster than the noise falls
+FU_PER_FC_MAX, FU_PER_FC_MIN, FU_STEP = 4.0, 0.5, 0.8
 # The sensor's noise through the law as built (law_noise_rate) moves the input; where it moves it
 # more than CHATTER_WARN_PER_NEED times the rate the task's reference needs (|ppc.ref_ff| x the
 # reference's mean speed), the report warns that the valve will chatter. The user may bound it
@@ -228,13 +230,15 @@ class Task:
 @dataclass
 class Measured:
     polarity_measured: int              # sign of dx/dp
-    noise_cm: float                     # standard deviation at rest
+    noise_cm: float                     # the position's noise [cm, 1 sigma]: at rest, at least resolution_cm / sqrt(12)
     static_map: StaticMap
     steps: list[StepFit]
     period_s: float
     kpa_per_u: float
     p_min_kpa: float
     p_max_kpa: float
+    noise_rest_cm: float | None = None  # the standard deviation at rest as measured [cm]
+    resolution_cm: float = 0.0          # one ADC count [cm] (adc.gain_cm_per_count); 0: not known
 
 
 @dataclass
