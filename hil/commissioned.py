@@ -24,10 +24,8 @@ from pmactl.rules import set_order
 
 from .offline_bus import OfflineBus
 from .reference import reference_function
-from .scenario import COMMISSIONED_NODE_WIDE, RULE_PARAMS, Controller, Scenario, protocol
+from .scenario import COMMISSIONED_NODE_WIDE, RULE_PARAMS, USER_LIMITS, Controller, Scenario, protocol
 
-# the rig's wiring and the user's limits: what a freshly wired node knows before commissioning
-USER_LIMITS = ("act.p_min_kpa", "act.p_max_kpa", "safety.x_min_cm", "safety.x_max_cm")
 # the derived parameters a lane takes, by its mode (the PPC's fallback is MFAC: it takes MFAC's)
 DERIVED_BY_MODE = {"PPC": ("ppc.", "vel.", "mfac."), "MFAC": ("mfac.",)}
 

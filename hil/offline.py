@@ -553,7 +553,10 @@ def with_overrides(sc: Scenario, fw: list[Override], rig: list[Override]) -> Sce
             raise OptionError(f"{last.option}: {msg}") from e
         raise OptionError(f"{'/'.join(sorted({o.option.split()[0] for o in rig})) or '--rig'}: {e}") from e
     ctrls = [replace(c, params={**c.params, **ctrl_over}) for c in sc.controllers]
-    out = replace(sc, reference=reference, rig=rig_data, controllers=ctrls)
+    # a user limit given for every lane is the node's before commissioning too: the pressure range
+    # the commissioning sweeps and the band it keeps clear of
+    params = {**sc.params, **{k: v for k, v in ctrl_over.items() if k in scn.USER_LIMITS}}
+    out = replace(sc, params=params, reference=reference, rig=rig_data, controllers=ctrls)
     if fw or rig:
         given = ", ".join(o.shown() for o in [*fw, *rig])
         try:

@@ -67,6 +67,9 @@ RULE_PARAMS = ("adc.gain_cm_per_count", "adc.raw_min_counts", "adc.raw_max_count
 # band check); everything else comes from commissioning, the node-wide input set-up included
 COMMISSION_TASK_PARAMS = ("ppc.w1_cm", "ppc.t_u_s", "ppc.band_check")
 COMMISSIONED_NODE_WIDE = ("act.polarity", "act.p0_kpa", "ctrl.u_min", "ctrl.u_max")
+# the user's limits: with the rig's wiring, what a freshly wired node knows before commissioning,
+# and what commissioning keeps within (the pressure range it sweeps, the band it stays clear of)
+USER_LIMITS = ("act.p_min_kpa", "act.p_max_kpa", "safety.x_min_cm", "safety.x_max_cm")
 COMMISSION_MODES = ("PPC", "MFAC")
 
 SCENARIO_DIR = Path(__file__).resolve().parent / "scenarios"

@@ -796,6 +796,26 @@ def test_an_explicit_set_wins_over_the_commissioned_value(tmp_path: Path):
         "ppc.ref_ff"]
 
 
+def test_a_user_limit_set_for_every_lane_is_the_commissionings_too(tmp_path: Path):
+    """`hil offline --commission --set act.p_max_kpa=600`: the user's pressure range is what the
+    node knows before commissioning, so the static map stays inside it and the derived input
+    range with it (the lanes then ARM and run; before, commissioning swept to the file's 900 kPa
+    and START refused the input range that came out of it)."""
+    import json
+
+    from hil.__main__ import main as hil_main
+    code = hil_main(["offline", "case2b", "--controller", "ppc", "--duration", "2", "--commission", "--brief",
+                     "--set", "act.p_max_kpa=600", "--out", str(tmp_path)])
+    assert code == 0
+    c = json.loads((tmp_path / "commissioning.json").read_text())
+    assert max(c["measured"]["static_map"]["p_up_kpa"] + c["measured"]["static_map"]["p_down_kpa"]) <= 600.0
+    d = c["derivation"]["params"]
+    assert d["act.p0_kpa"] + d["ctrl.u_max"] <= 600.0 + 1e-3
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["controllers"]["ppc"]["params_set"]["act.p_max_kpa"] == 600.0
+    assert summary["state"]["ppc"] == "RUNNING"
+
+
 def test_the_harness_commissions_with_the_scenarios_noise_limit():
     """hil run/offline --commission --noise-limit K: the scenario's noise_limit reaches the
     commissioning's task, and on a 4x coarser sensor it slows the observer the margins chose."""
