@@ -686,6 +686,18 @@ def test_commission_refuses_an_actuator_that_does_not_move_the_muscle(rig_node):
     assert node.status().state_name == "IDLE"
 
 
+def test_commission_refuses_a_band_the_resting_muscle_is_outside_of(rig_node):
+    """A band that leaves out where the vented muscle rests: the node refuses ARM (RANGE), and
+    commissioning says so and what to check, the node left as it was."""
+    bus, node = rig_node
+    node.set("safety.x_max_cm", -0.8)
+    before = _snapshot(node)
+    with pytest.raises(CommissionError, match=r"refused ARM \(RANGE\).*-3\.\.-0\.8 cm"):
+        Commissioning(node, Task(w1_cm=0.2, t_u_s=2.0, x_min_cm=-3.0, x_max_cm=-0.8)).run()
+    assert _snapshot(node) == before
+    assert node.status().state_name == "IDLE"
+
+
 def test_commission_refuses_a_band_outside_the_stroke(rig_node):
     bus, node = rig_node
     with pytest.raises(CommissionError, match="constraint"):

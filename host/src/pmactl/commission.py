@@ -22,7 +22,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .client import NodeStateError, NoReply, PmaNode
+from .client import CommandError, NodeStateError, NoReply, PmaNode
 from .commission_rules import CommissionError, Derivation, Measured, StaticMap, StepFit, Task, derive, fit_step
 
 # what the procedure changes on the node (set back at the end unless applied)
@@ -155,8 +155,8 @@ class Commissioning:
         node.set("ref.kind", 0)
         node.set("telem.decimation", 1)
         node.set("telem.mask", TELEM_MASK)
-        node.arm()
-        node.start()
+        self._command("ARM", node.arm)
+        self._command("START", node.start)
         t_start = self._wait_s(0.05)
         # --- wiring: the noise at rest, then which way a small step moves x
         self.progress("wiring check", 0.0)
@@ -271,6 +271,22 @@ class Commissioning:
         return fits
 
     # -------------------------------------------------------------- helpers --
+    def _command(self, what: str, send: Callable[[], object]) -> None:
+        """ARM or START for the open-loop measurements; a refusal is a CommissionError that says
+        what to check (the node is left as the procedure found it)."""
+        try:
+            send()
+        except CommandError as e:
+            if e.name == "RANGE":
+                lo, hi = float(self.node.get("safety.x_min_cm")), float(self.node.get("safety.x_max_cm"))
+                raise CommissionError(
+                    f"the node refused {what} (RANGE): the muscle must rest inside the band safety.x_min_cm.."
+                    f"x_max_cm = {lo:g}..{hi:g} cm before anything moves (check the band against where the "
+                    "vented muscle rests, and the sensor's zero adc.offset_cm), or a rule between parameters is "
+                    "broken (pmactl counters LAST_RULE)") from e
+            raise CommissionError(f"the node refused {what} ({e.name}): check pmactl status, the sensor's "
+                                  "wiring and the rig's samples") from e
+
     def _hold(self, p_kpa: float, seconds: float, label: str, stop_near_limits: bool = False) -> Recording:
         """Command p_kpa and record x for `seconds` of control time (from the next sample)."""
         p = min(max(p_kpa, self.p_min), self.p_max)
