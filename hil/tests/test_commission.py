@@ -310,6 +310,17 @@ def test_derive_says_what_the_task_cannot_have():
         derive(_measured(), Task(w1_cm=0.2, t_u_s=2.0, x_min_cm=-9.0, x_max_cm=-6.0))
 
 
+def test_a_reference_beyond_the_band_less_w1_is_said():
+    """eq. 14: START refuses a reference that does not keep w1 inside the constraints; the report
+    says so before the user meets the refusal, and only then."""
+    base = dict(w1_cm=0.2, t_u_s=2.0, x_min_cm=-3.0, x_max_cm=0.0)
+    inside = derive(_measured(), Task(**base, x_ref_min_cm=-2.5, x_ref_max_cm=-0.5))
+    assert not any("BAND" in w for w in inside.warnings)
+    for lo, hi in ((-2.9, -0.5), (-2.5, -0.1)):
+        beyond = derive(_measured(), Task(**base, x_ref_min_cm=lo, x_ref_max_cm=hi))
+        assert any("refuses START (BAND" in w and f"{lo:.3f}..{hi:.3f} cm" in w for w in beyond.warnings)
+
+
 def test_a_t_u_shorter_than_the_armed_distance_over_the_loops_speed_is_said():
     d = derive(_measured(), TASK)
     f = d.figures

@@ -568,6 +568,12 @@ def derive(m: Measured, task: Task) -> Derivation:
         warnings.append(f"only {reach_lo:.3f}..{reach_hi:.3f} cm of the band {band_lo:.3f}..{band_hi:.3f} cm "
                         "(the constraints minus w1) is within the measured stroke: references outside it "
                         "cannot be tracked")
+    ref_lo = band_lo if task.x_ref_min_cm is None else task.x_ref_min_cm
+    ref_hi = band_hi if task.x_ref_max_cm is None else task.x_ref_max_cm
+    if ref_lo < band_lo or ref_hi > band_hi:
+        warnings.append(f"the reference spans {ref_lo:.3f}..{ref_hi:.3f} cm, beyond the band less w1 ({band_lo:.3f}.."
+                        f"{band_hi:.3f} cm): the paper's controller refuses START (BAND, eq. 14) while ppc.band_check "
+                        "is 1; narrow the reference, widen the constraints or lower w1")
     polarity = 1 if m.polarity_measured > 0 else -1
     x_mid = 0.5 * (reach_lo + reach_hi)
     x_start = x_mid if task.x_start_cm is None else min(max(task.x_start_cm, reach_lo), reach_hi)
