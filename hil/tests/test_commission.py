@@ -709,6 +709,18 @@ def test_commission_refuses_a_band_the_resting_muscle_is_outside_of(rig_node):
     assert node.status().state_name == "IDLE"
 
 
+def test_commission_refuses_a_pressure_range_that_does_not_move_the_muscle_clear_of_the_band(rig_node):
+    """act.p_max_kpa 50: every level leaves the vented muscle within the margin of x_max; the
+    refusal names the pressure range as well as the band."""
+    bus, node = rig_node
+    node.set("act.p_max_kpa", 50.0)
+    before = _snapshot(node)
+    with pytest.raises(CommissionError, match=r"no stroke to map.*p_max_kpa = 0\.\.50 kPa"):
+        Commissioning(node, TASK).run()
+    assert _snapshot(node) == before
+    assert node.status().state_name == "IDLE"
+
+
 def test_commission_refuses_a_band_outside_the_stroke(rig_node):
     bus, node = rig_node
     with pytest.raises(CommissionError, match="constraint"):

@@ -229,7 +229,9 @@ class Commissioning:
         if len(down_p) < 3:
             raise CommissionError(f"the position comes within {self.margin_cm:g} cm of a constraint at all but "
                                   f"{len(down_p)} of {LEVELS} pressure levels: the constraints leave no stroke to map "
-                                  "(check safety.x_min_cm / x_max_cm and the sensor's zero)")
+                                  "(check safety.x_min_cm / x_max_cm and the sensor's zero), or the pressure range "
+                                  f"act.p_min_kpa..p_max_kpa = {self.p_min:g}..{self.p_max:g} kPa does not move the "
+                                  "muscle clear of them")
         up_p: list[float] = []
         up_x: list[float] = []
         for p in reversed(down_p):
