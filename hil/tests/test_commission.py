@@ -625,6 +625,18 @@ def test_commission_on_the_paper_rig(rig_node):
     assert node.status().state_name == "IDLE"
 
 
+def test_commission_starts_whatever_reference_the_node_was_left_with(rig_node):
+    """START checks the reference against the band in every mode, OPEN_LOOP too: a HOLD left
+    outside the band (a node's earlier task) must not stop commissioning, and is set back."""
+    bus, node = rig_node
+    node.set("ref.offset_cm", -5.0)             # outside safety.x_min_cm..x_max_cm = -3..0 cm
+    before = _snapshot(node)
+    r = Commissioning(node, TASK).run()
+    assert r.derivation.params["act.polarity"] == -1
+    assert _snapshot(node) == before and node.get("ref.offset_cm") == -5.0
+    assert node.status().state_name == "IDLE"
+
+
 def test_commission_apply_sets_the_parameters(rig_node):
     bus, node = rig_node
     r = Commissioning(node, TASK).run(apply=True)

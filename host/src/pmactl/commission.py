@@ -27,7 +27,7 @@ from .commission_rules import CommissionError, Derivation, Measured, StaticMap, 
 
 # what the procedure changes on the node (set back at the end unless applied)
 TOUCHED = ("ctrl.mode", "ctrl.openloop_u", "ctrl.u_min", "ctrl.u_max", "act.p0_kpa", "act.polarity",
-           "telem.decimation", "telem.mask", "ref.kind")
+           "telem.decimation", "telem.mask", "ref.kind", "ref.offset_cm")
 OPEN_LOOP = 4               # ctrl.mode
 TELEM_MASK = 0x11           # TELEM_A (time, x) and TELEM_E (pressure, flags)
 SETTLE_S = 1.5              # after START at the preset pressure (ARM slews there)
@@ -153,6 +153,9 @@ class Commissioning:
         node.set("ctrl.mode", OPEN_LOOP)
         node.set("ctrl.openloop_u", 0.0)
         node.set("ref.kind", 0)
+        # OPEN_LOOP does not follow the reference, but START checks it against the band in every
+        # mode: HOLD at the band's middle, whatever the task's reference was left at
+        node.set("ref.offset_cm", 0.5 * (float(node.get("safety.x_min_cm")) + float(node.get("safety.x_max_cm"))))
         node.set("telem.decimation", 1)
         node.set("telem.mask", TELEM_MASK)
         self._command("ARM", node.arm)
