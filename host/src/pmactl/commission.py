@@ -94,6 +94,10 @@ class Commissioning:
     def run(self, apply: bool = False, save: bool = False) -> Result:
         wall0 = time.monotonic()
         node = self.node
+        t = self.task
+        if not t.x_max_cm - t.x_min_cm > 2.0 * t.w1_cm:     # before anything moves (pmactl checks it as an option)
+            raise CommissionError(f"the task's band {t.x_min_cm:g}..{t.x_max_cm:g} cm is not wider than 2 w1 = "
+                                  f"{2.0 * t.w1_cm:g} cm (eq. 14): no reference keeps w1 inside it")
         st = node.status(self.timeout_s)
         if st.state_name != "IDLE":
             raise NodeStateError(f"node {node.node} is {st.state_name}"
