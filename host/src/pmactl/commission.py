@@ -114,6 +114,8 @@ class Commissioning:
         self.period_s = 1.0 / float(node.get("sys.tick_hz"))
         # one ADC count in cm: the finest position step the loop can see
         self.resolution_cm = abs(float(node.get("adc.gain_cm_per_count")))
+        # the node's band [cm]: the HOLD reference START checks, and what a RANGE refusal names
+        self.band_cm = (float(node.get("safety.x_min_cm")), float(node.get("safety.x_max_cm")))
         self.margin_cm = max(0.1, 0.5 * self.task.w1_cm)
         ok = False
         try:
@@ -159,7 +161,7 @@ class Commissioning:
         node.set("ref.kind", 0)
         # OPEN_LOOP does not follow the reference, but START checks it against the band in every
         # mode: HOLD at the band's middle, whatever the task's reference was left at
-        node.set("ref.offset_cm", 0.5 * (float(node.get("safety.x_min_cm")) + float(node.get("safety.x_max_cm"))))
+        node.set("ref.offset_cm", 0.5 * (self.band_cm[0] + self.band_cm[1]))
         node.set("telem.decimation", 1)
         node.set("telem.mask", TELEM_MASK)
         self._command("ARM", node.arm)
@@ -287,7 +289,7 @@ class Commissioning:
             send()
         except CommandError as e:
             if e.name == "RANGE":
-                lo, hi = float(self.node.get("safety.x_min_cm")), float(self.node.get("safety.x_max_cm"))
+                lo, hi = self.band_cm
                 raise CommissionError(
                     f"the node refused {what} (RANGE): the muscle must rest inside the band safety.x_min_cm.."
                     f"x_max_cm = {lo:g}..{hi:g} cm before anything moves (check the band against where the "
