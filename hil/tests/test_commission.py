@@ -23,7 +23,7 @@ from hil.commissioned import before_commissioning
 from hil.offline_bus import OfflineBus
 from pmactl import cli, commission_report
 from pmactl.client import NodeStateError, PmaNode
-from pmactl.commission import TOUCHED, Commissioning
+from pmactl.commission import TOUCHED, CommissionAborted, Commissioning
 from pmactl.commission_rules import (
     CommissionError,
     Measured,
@@ -664,6 +664,20 @@ def test_commission_refuses_a_disconnected_sensor(rig_node):
     with pytest.raises(CommissionError, match="sensor"):
         Commissioning(node, TASK).run()
     assert _snapshot(node) == before
+
+
+@pytest.mark.parametrize("rig_node", [("case3", {"noise_cm": 1.0})], indirect=True)
+def test_a_fault_while_it_runs_says_when_where_and_what_to_check(rig_node):
+    """A sensor so noisy that x crosses the band at rest faults the node (POSITION_LIMIT) before
+    the wiring check can weigh its noise: the abort names the fault, when it came, where x was
+    and what to check, and the node is left as it was (safe, every parameter set back)."""
+    bus, node = rig_node
+    before = _snapshot(node)
+    with pytest.raises(CommissionAborted, match=r"during the start at x = -?\d+\.\d+ cm: FAULT \(fault "
+                                                r"POSITION_LIMIT\): .*noisy sensor"):
+        Commissioning(node, TASK).run()
+    assert _snapshot(node) == before
+    assert node.status().state_name != "RUNNING"
 
 
 QUIET_SENSOR = {"noise_cm": 0.0, "adc_noise_counts": 0.0}      # a still muscle reads one value at rest

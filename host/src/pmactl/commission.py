@@ -41,6 +41,21 @@ NOISE_MAX_CM = 0.05         # a noisier sensor at rest is refused
 MOVE_MIN_CM = 0.005         # the direction step must move x at least this much (and 6 sigma)
 
 
+# what to check when the node faults while commissioning runs (FaultCode names, the DBC)
+FAULT_HINTS = {
+    "POSITION_LIMIT": "x left safety.x_min_cm..x_max_cm (less safety.x_margin_cm): a noisy sensor or a wrong "
+                      "adc.* scaling (look at x at rest with pmactl monitor), or a band that leaves the muscle too "
+                      "little room",
+    "SENSOR_RANGE": "the sensor read outside adc.raw_min_counts..raw_max_counts: check its wiring, its supply and "
+                    "those limits",
+    "SENSOR_WIRE_BREAK": "the sensor's signal fell below adc.wire_break_below_counts: check its wiring and supply",
+    "SENSOR_READ": "the ADC did not read: check the sensor's input",
+    "SENSOR_TIMEOUT": "no sample for safety.sensor_timeout_ticks: check the sensor, or the plant bridge's samples",
+    "HOST_HEARTBEAT_LOST": "the node heard no host heartbeat for safety.host_timeout_ms: check the bus",
+    "ESTOP": "the emergency stop was pressed",
+}
+
+
 class CommissionAborted(RuntimeError):
     """The procedure stopped before it ended (the reason is the message); the node is safe."""
 
@@ -79,7 +94,13 @@ class Commissioning:
                  timeout_s: float = 2.0) -> None:
         self.node = node
         self.task = task
-        self.progress = progress or (lambda what, frac: None)
+        user_progress = progress or (lambda what, frac: None)
+        self.phase = "start"         # what the procedure was doing (the last progress), for an abort's message
+
+        def progress_and_phase(what: str, frac: float) -> None:
+            self.phase = what
+            user_progress(what, frac)
+        self.progress = progress_and_phase
         self.timeout_s = timeout_s
         self.saved: dict[str, float | int] = {}
         self.recordings: dict[str, Recording] = {}
@@ -368,8 +389,11 @@ class Commissioning:
                 state = self.node.proto.state_names.get(int(sig["State"]), str(sig["State"]))
                 if state != "RUNNING":
                     fault = self.node.statuses[nid].fault_name
-                    raise CommissionAborted(f"the node left RUNNING: {state}"
-                                            + (f" (fault {fault})" if fault != "NONE" else ""))
+                    where = f" during the {self.phase}" + (f" at x = {self.x_now:.3f} cm" if math.isfinite(self.x_now)
+                                                           else "")
+                    hint = f": {FAULT_HINTS[fault]}" if fault in FAULT_HINTS else ""
+                    raise CommissionAborted(f"the node left RUNNING{where}: {state}"
+                                            + (f" (fault {fault}){hint}" if fault != "NONE" else ""))
             elif name == "TELEM_A":
                 self._row = {"t": float(sig["TimeMs"]) / 1000.0, "x": float(sig["XCm"])}
             elif name == "TELEM_E" and "t" in self._row:
