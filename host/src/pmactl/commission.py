@@ -44,8 +44,8 @@ MOVE_MIN_CM = 0.005         # the direction step must move x at least this much 
 # what to check when the node faults while commissioning runs (FaultCode names, the DBC)
 FAULT_HINTS = {
     "POSITION_LIMIT": "x left safety.x_min_cm..x_max_cm (less safety.x_margin_cm): a noisy sensor or a wrong "
-                      "adc.* scaling (look at x at rest with pmactl monitor), or a band that leaves the muscle too "
-                      "little room",
+                      "adc.* scaling (compare x above with where the muscle is), or a band that leaves the muscle "
+                      "too little room",
     "SENSOR_RANGE": "the sensor read outside adc.raw_min_counts..raw_max_counts: check its wiring, its supply and "
                     "those limits",
     "SENSOR_WIRE_BREAK": "the sensor's signal fell below adc.wire_break_below_counts: check its wiring and supply",
