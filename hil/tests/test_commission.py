@@ -750,7 +750,7 @@ def test_commission_refuses_a_pressure_range_that_does_not_move_the_muscle_clear
 def test_commission_refuses_a_band_not_wider_than_two_w1_before_anything_moves(rig_node):
     bus, node = rig_node
     before = _snapshot(node)
-    with pytest.raises(CommissionError, match=r"band -3\.\.0 cm is not wider than 2 w1 = 4 cm"):
+    with pytest.raises(CommissionError, match=r"the task: the band -3\.\.0 cm is not wider than 2 w1 = 4 cm"):
         Commissioning(node, Task(w1_cm=2.0, t_u_s=2.0, x_min_cm=-3.0, x_max_cm=0.0)).run()
     assert _snapshot(node) == before
     assert node.status().state_name == "IDLE"

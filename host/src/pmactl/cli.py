@@ -1171,16 +1171,12 @@ SINGLE_NODE = ("scan", "record", "plot", "monitor", "node-id", "commission")
 
 
 def _check_band(x_min: float, x_max: float, w1: float, x_start: float | None, source: str) -> None:
-    """The task's band (docs/commissioning.md): x_min < x_max, wider than 2 w1 (eq. 14), and
-    x_start within it less w1 (x_min + w1 .. x_max - w1), where the reference can run."""
-    if not x_min < x_max:
-        raise UsageError(f"--x-min {x_min:g} cm must be below --x-max {x_max:g} cm{source}")
-    if x_max - x_min <= 2 * w1:
-        raise UsageError(f"the band {x_min:g}..{x_max:g} cm{source} is not wider than 2 w1 = {2 * w1:g} cm "
-                         f"(eq. 14)")
-    if x_start is not None and not x_min + w1 <= x_start <= x_max - w1:
-        raise UsageError(f"--x-start {x_start:g} cm is outside {x_min + w1:g}..{x_max - w1:g} cm: the band "
-                         f"{x_min:g}..{x_max:g} cm{source} less w1 = {w1:g} cm")
+    """The task's band as commissioning checks it (commission_rules.band_problem), named by the
+    options; `source` says where a value not given as an option came from."""
+    from .commission_rules import band_problem
+    problem = band_problem(x_min, x_max, w1, x_start, names=("--x-min", "--x-max", "--x-start"))
+    if problem is not None:
+        raise UsageError(problem + source)
 
 
 def cmd_commission(s: Session) -> int:

@@ -23,7 +23,17 @@ from typing import Any, Callable
 import numpy as np
 
 from .client import CommandError, NodeStateError, NoReply, PmaNode
-from .commission_rules import CommissionError, Derivation, Measured, StaticMap, StepFit, Task, derive, fit_step
+from .commission_rules import (
+    CommissionError,
+    Derivation,
+    Measured,
+    StaticMap,
+    StepFit,
+    Task,
+    band_problem,
+    derive,
+    fit_step,
+)
 
 # what the procedure changes on the node (set back at the end unless applied)
 TOUCHED = ("ctrl.mode", "ctrl.openloop_u", "ctrl.u_min", "ctrl.u_max", "act.p0_kpa", "act.polarity",
@@ -116,9 +126,12 @@ class Commissioning:
         wall0 = time.monotonic()
         node = self.node
         t = self.task
-        if not t.x_max_cm - t.x_min_cm > 2.0 * t.w1_cm:     # before anything moves (pmactl checks it as an option)
-            raise CommissionError(f"the task's band {t.x_min_cm:g}..{t.x_max_cm:g} cm is not wider than 2 w1 = "
-                                  f"{2.0 * t.w1_cm:g} cm (eq. 14): no reference keeps w1 inside it")
+        # before anything moves (pmactl checks the same as options, x_start too). The reference's
+        # start is not checked here: where it lies outside the reachable band, the derivation
+        # takes the start's holding input at the band's edge and says so
+        problem = band_problem(t.x_min_cm, t.x_max_cm, t.w1_cm)
+        if problem is not None:
+            raise CommissionError(f"the task: {problem}")
         st = node.status(self.timeout_s)
         if st.state_name != "IDLE":
             raise NodeStateError(f"node {node.node} is {st.state_name}"

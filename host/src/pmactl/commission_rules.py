@@ -227,6 +227,24 @@ class Task:
     x_ref_max_cm: float | None = None
 
 
+def band_problem(x_min_cm: float, x_max_cm: float, w1_cm: float, x_start_cm: float | None = None,
+                 names: tuple[str, str, str] = ("x_min", "x_max", "x_start")) -> str | None:
+    """What is wrong with a task's band, or None (docs/commissioning.md, "What it needs"): x_min
+    below x_max, the band wider than 2 w1 (eq. 14: no reference keeps w1 inside a narrower one),
+    and x_start, where given, inside the band less w1, where the reference can run. `names`
+    are how the caller calls x_min, x_max and x_start (pmactl: its options)."""
+    n_min, n_max, n_start = names
+    if not x_min_cm < x_max_cm:
+        return f"{n_min} {x_min_cm:g} cm must be below {n_max} {x_max_cm:g} cm"
+    if not x_max_cm - x_min_cm > 2.0 * w1_cm:
+        return (f"the band {x_min_cm:g}..{x_max_cm:g} cm is not wider than 2 w1 = {2.0 * w1_cm:g} cm (eq. 14): "
+                "no reference keeps w1 inside it")
+    if x_start_cm is not None and not x_min_cm + w1_cm <= x_start_cm <= x_max_cm - w1_cm:
+        return (f"{n_start} {x_start_cm:g} cm is outside {x_min_cm + w1_cm:g}..{x_max_cm - w1_cm:g} cm: the band "
+                f"{x_min_cm:g}..{x_max_cm:g} cm less w1 = {w1_cm:g} cm")
+    return None
+
+
 @dataclass
 class Measured:
     polarity_measured: int              # sign of dx/dp
