@@ -134,6 +134,38 @@ def test_set_rejected_carries_code_and_kept_value(client, fake) -> None:
     assert e.value.param is not None and e.value.param.name == "act.p0_kpa"
 
 
+@pytest.mark.parametrize("name, value, message", [
+    ("ppc.w1_cm", float("inf"), r"ppc\.w1_cm \(f32\): inf is outside .*nothing sent"),
+    ("ppc.w1_cm", 1e39, r"ppc\.w1_cm \(f32\): 1e\+39 is outside"),
+    ("ppc.w1_cm", "abc", r"ppc\.w1_cm"),
+    ("ppc.w1_cm", None, r"ppc\.w1_cm: None is not a number"),
+    ("ppc.w1_cm", True, r"ppc\.w1_cm: True is not a number"),
+    ("ctrl.mode", 2.5, r"ctrl\.mode is an integer parameter: 2\.5"),
+    ("ctrl.mode", float("nan"), r"ctrl\.mode is an integer parameter: nan"),
+    ("telem.mask", 2**40, r"telem\.mask \(u32\): 1099511627776 is outside 0\.\.4294967295"),
+    ("telem.mask", -1, r"telem\.mask \(u32\): -1 is outside 0\.\.4294967295"),
+])
+def test_set_refuses_what_no_frame_can_carry_and_sends_nothing(client, fake, name, value, message) -> None:
+    """A value the SET frame cannot carry (an infinity, beyond float32, a fraction or a number
+    beyond its type for an integer parameter, not a number at all) is a ValueError that names
+    the parameter, and nothing is sent; a NaN for an f32 parameter goes out and the node refuses
+    it (NOT_FINITE), as every range check is the node's."""
+    fake()
+    before = client.get(name)
+    with pytest.raises(ValueError, match=message):
+        client.set(name, value)
+    assert client.get(name) == before
+
+
+def test_an_unknown_command_or_an_argument_beyond_a_byte_is_refused_before_sending(client, fake) -> None:
+    fake()
+    with pytest.raises(KeyError, match=r"no command 'FLY'; known: .*ARM"):
+        client.command("FLY")
+    with pytest.raises(ValueError, match=r"bytes \(0\.\.255\), got 3 and 300"):
+        client.command("START", 300)
+    assert client.proto.state_names[client.heartbeat()["State"]] == "IDLE"
+
+
 def test_param_table(client, fake) -> None:
     fake(overrides={"ppc.t_u_s": {"min": 0.5}})
     table = {i.name: i for i in client.param_table()}

@@ -23,8 +23,6 @@ import cantools
 from pmactl import adapters, identity, paramfile
 from pmactl.client import (
     NODE_REPLIES,
-    TYPE_CODES,
-    TYPE_SIGNALS,
     BadBusConfig,
     BusMonitor,
     CommandError,
@@ -43,6 +41,7 @@ from pmactl.client import (
     describe_bus,
     open_bus,
     scan,
+    wire_value,
 )
 from pmactl.nodedbc import NodeListError, node_dbc_text, parse_nodes, write_node_dbc
 from pmactl.protocol import BROADCASTS, Param, Protocol, load_protocol
@@ -676,11 +675,9 @@ def cmd_params_get(s: Session) -> int:
 def cmd_params_set(s: Session) -> int:
     p = s.param(s.args.name)
     try:
-        value = p.parse(s.args.value) if s.args.no_check else p.check(s.args.value)
         # --no-check leaves the table's range to the node, but the frame's value signal
         # (PARAM_REQ ValueF32/U32/I32) has its own: out of it, nothing can be sent
-        s.proto.check_signal("PARAM_REQ", TYPE_SIGNALS[TYPE_CODES[p.type]], value,
-                             what=f"{p.name} ({p.type})", finite=False)
+        value = wire_value(s.proto, p, s.args.value if s.args.no_check else p.check(s.args.value))
     except ValueError as e:
         raise UsageError(str(e)) from None
     node = s.node

@@ -58,6 +58,7 @@ from pmactl.node import (
     RawListener,
     Status,
     param_value_text,
+    wire_value,
 )
 from pmactl.recorder import (
     RecordProgress,
@@ -106,4 +107,5 @@ __all__ = [
     "open_bus",
     "param_value_text",
     "scan",
+    "wire_value",
 ]

@@ -20,6 +20,27 @@ TYPE_SIGNALS = {0: "ValueF32", 1: "ValueU32", 2: "ValueI32"}
 TYPE_NAMES = {v: k for k, v in TYPE_CODES.items()}
 OPS: dict[str, int] = load_protocol().param_ops   # PARAM_REQ's Op names, from the packaged DBC
 
+def wire_value(proto: Protocol, p: Param, value: object) -> float | int:
+    """value as a SET of p carries it (PARAM_REQ's ValueF32 / ValueU32 / ValueI32): a float for
+    an f32 parameter, an int otherwise; text as Param.parse reads it. ValueError naming the
+    parameter for what no frame can carry: not a number, a fraction for an integer parameter,
+    beyond the value signal's range (the DBC's: an infinity, a float beyond float32, an integer
+    outside its type). The table's range is not checked (Param.check does that; the node
+    checks it anyway), and a NaN goes out: the node refuses it (NOT_FINITE)."""
+    if isinstance(value, str):
+        value = p.parse(value)
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ValueError(f"{p.name}: {value!r} is not a number")
+    if p.type == "f32":
+        value = float(value)
+    elif isinstance(value, float):
+        if not value.is_integer():
+            raise ValueError(f"{p.name} is an integer parameter: {value!r} is not an integer")
+        value = int(value)
+    return proto.check_signal("PARAM_REQ", TYPE_SIGNALS[TYPE_CODES[p.type]], value, what=f"{p.name} ({p.type})",
+                              finite=False)
+
+
 HOST_HEARTBEAT_PERIOD_S = 0.1       # 10 Hz, well inside the default safety.host_timeout_ms (500 ms)
 
 
@@ -227,7 +248,15 @@ class PmaNode:
 
     # ---------------------------------------------------------- commands --
     def command(self, command: str | int, arg: int = 0, check: bool = True) -> Ack:
-        code = self.proto.commands[command] if isinstance(command, str) else int(command)
+        if isinstance(command, str):
+            if command not in self.proto.commands:
+                raise KeyError(f"no command {command!r}; known: {', '.join(self.proto.commands)}")
+            code = self.proto.commands[command]
+        else:
+            code = int(command)
+        if not (0 <= code <= 255 and 0 <= arg <= 255):
+            raise ValueError(f"command {command}: the command and its argument are bytes (0..255), got "
+                             f"{code} and {arg}")
         self.send("COMMAND", {"Command": code, "Arg": arg})
         sig = self.wait_for("COMMAND_ACK", lambda s: s["Command"] == code and s["Arg"] == arg)
         ack = Ack(sig["Command"], sig["Arg"], sig["Result"], sig["State"])
@@ -320,12 +349,7 @@ class PmaNode:
         Not checked against the table here (the node checks): use Param.check first.
         SetRejected (a PmaError) when the node refuses, with the value it kept."""
         p = self.proto.param(key)
-        if p.type == "f32":
-            value = float(value)
-        elif isinstance(value, float):
-            if not value.is_integer():
-                raise ValueError(f"{p.name} is an integer parameter")
-            value = int(value)
+        value = wire_value(self.proto, p, value)
         r = self.param_request("SET", p.id, TYPE_CODES[p.type], value)
         if r.result < 0:
             raise SetRejected(f"set {p.name} = {p.text(value)}", r.result,
