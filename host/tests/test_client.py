@@ -157,12 +157,14 @@ def test_set_refuses_what_no_frame_can_carry_and_sends_nothing(client, fake, nam
     assert client.get(name) == before
 
 
-def test_an_unknown_command_or_an_argument_beyond_a_byte_is_refused_before_sending(client, fake) -> None:
+def test_an_unknown_command_or_state_or_an_argument_beyond_a_byte_is_refused_before_sending(client, fake) -> None:
     fake()
     with pytest.raises(KeyError, match=r"no command 'FLY'; known: .*ARM"):
         client.command("FLY")
     with pytest.raises(ValueError, match=r"bytes \(0\.\.255\), got 3 and 300"):
         client.command("START", 300)
+    with pytest.raises(KeyError, match=r"no state 'FLYING'; known: .*IDLE"):
+        client.wait_state("FLYING", timeout_s=0.1)
     assert client.proto.state_names[client.heartbeat()["State"]] == "IDLE"
 
 

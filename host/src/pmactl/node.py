@@ -459,7 +459,10 @@ class PmaNode:
 
     def wait_state(self, state: str, timeout_s: float | None = None) -> Status:
         """The first heartbeat that shows `state` (e.g. "FAULT")."""
-        code = {v: k for k, v in self.proto.state_names.items()}[state]
+        codes = {v: k for k, v in self.proto.state_names.items()}
+        if state not in codes:
+            raise KeyError(f"no state {state!r}; known: {', '.join(codes)}")
+        code = codes[state]
         sig = self.wait_for("HEARTBEAT", lambda s: s["State"] == code, timeout_s=timeout_s)
         return Status.from_signals(self.proto, self.node, sig)
 
