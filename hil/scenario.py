@@ -241,7 +241,8 @@ def _merge(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:
 
 
 def _read(path: Path, seen: tuple[Path, ...] = ()) -> dict[str, Any]:
-    """A scenario file's table, on top of its `base` file (a path relative to it) if any."""
+    """A scenario file's table, on top of its `base` file if any: a path relative to it, or a
+    shipped scenario's name (hil/scenarios/NAME.toml, e.g. "case3" or "realistic/dmsp10/case3")."""
     if path in seen:
         raise ScenarioError(f"{path}: base files include each other")
     try:
@@ -255,9 +256,15 @@ def _read(path: Path, seen: tuple[Path, ...] = ()) -> dict[str, Any]:
     base = data.pop("base", None)
     if base is None:
         return data
-    base_path = path.parent / _text(f"{path}: base", base)
+    base_text = _text(f"{path}: base", base)
+    base_path = path.parent / base_text
     if not base_path.is_file():
-        raise ScenarioError(f"{path}: base: no file {base_path}")
+        # a user's own file outside hil/scenarios builds on a shipped one by its name
+        shipped = SCENARIO_DIR / f"{base_text}.toml"
+        if Path(base_text).suffix or not shipped.is_file():
+            raise ScenarioError(f"{path}: base: no file {base_path}, and {base_text!r} is not a shipped scenario's "
+                                f"name (hil/scenarios: {', '.join(available())}, or realistic/PROFILE/NAME)")
+        base_path = shipped
     return _merge(_read(base_path, (*seen, path)), data)
 
 

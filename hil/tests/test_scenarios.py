@@ -195,6 +195,7 @@ def test_every_shipped_scenario_file_loads_with_its_values_typed():
     (b'title = "caf\xe9"\n', "not UTF-8"),
     (b'base = 5\n', "base: expected text"),
     (b'base = "no_such_base.toml"\n', "base: no file"),
+    (b'base = "no_such_case"\n', "'no_such_case' is not a shipped scenario's name"),
     (b'seed = -1\n', "seed"),
 ])
 def test_a_bad_scenario_file_exits_2_with_one_line(tmp_path, capsys, text, message):
@@ -205,6 +206,20 @@ def test_a_bad_scenario_file_exits_2_with_one_line(tmp_path, capsys, text, messa
     assert main(["offline", str(f), "--brief"]) == 2
     err = capsys.readouterr().err
     assert message in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+
+
+def test_a_users_file_builds_on_a_shipped_scenario_by_its_name(tmp_path):
+    """A file outside hil/scenarios names the shipped scenario it builds on ("case3",
+    "realistic/dmsp10/case3"); a file beside it of that name would win (a path comes first)."""
+    f = tmp_path / "my_case3.toml"
+    f.write_text('base = "realistic/dmsp10/case3"\ntitle = "mine"\n[rig.load]\nmass_kg = 2.5\n')
+    mine, shipped = scn.load(str(f)), scn.load("realistic/dmsp10/case3")
+    assert mine.name == "my_case3" and mine.title == "mine" and mine.duration_s == shipped.duration_s
+    assert mine.rig["load"]["mass_kg"] == 2.5 and mine.controllers == shipped.controllers
+    assert mine.rig_params().valve == shipped.rig_params().valve      # the profile's, through the base
+    (tmp_path / "case3").write_text('duration_s = 7.0\n[[controllers]]\nlabel = "pid"\nmode = "PID"\n')
+    f.write_text('base = "case3"\n')
+    assert scn.load(str(f)).duration_s == 7.0
 
 
 # ---------------------------------------------- run, bench, report: options checked up front --
