@@ -20,6 +20,9 @@ TYPE_SIGNALS = {0: "ValueF32", 1: "ValueU32", 2: "ValueI32"}
 TYPE_NAMES = {v: k for k, v in TYPE_CODES.items()}
 OPS: dict[str, int] = load_protocol().param_ops   # PARAM_REQ's Op names, from the packaged DBC
 
+HOST_HEARTBEAT_PERIOD_S = 0.1       # 10 Hz, well inside the default safety.host_timeout_ms (500 ms)
+
+
 def wire_value(proto: Protocol, p: Param, value: object) -> float | int:
     """value as a SET of p carries it (PARAM_REQ's ValueF32 / ValueU32 / ValueI32): a float for
     an f32 parameter, an int otherwise; text as Param.parse reads it. ValueError naming the
@@ -39,9 +42,6 @@ def wire_value(proto: Protocol, p: Param, value: object) -> float | int:
         value = int(value)
     return proto.check_signal("PARAM_REQ", TYPE_SIGNALS[TYPE_CODES[p.type]], value, what=f"{p.name} ({p.type})",
                               finite=False)
-
-
-HOST_HEARTBEAT_PERIOD_S = 0.1       # 10 Hz, well inside the default safety.host_timeout_ms (500 ms)
 
 
 # ----------------------------------------------------------------- replies --
@@ -254,8 +254,11 @@ class PmaNode:
             code = self.proto.commands[command]
         else:
             code = int(command)
-        if not (0 <= code <= 255 and 0 <= arg <= 255):
-            raise ValueError(f"command {command}: the command and its argument are bytes (0..255), got "
+        # both are bytes in the DBC (COMMAND's Command and Arg): out of that, nothing can be sent
+        lo, hi = (int(v or 0) for v in self.proto.signal_range("COMMAND", "Arg")[:2])
+        c_lo, c_hi = (int(v or 0) for v in self.proto.signal_range("COMMAND", "Command")[:2])
+        if not (c_lo <= code <= c_hi and lo <= arg <= hi):
+            raise ValueError(f"command {command}: the command and its argument are bytes ({lo}..{hi}), got "
                              f"{code} and {arg}")
         self.send("COMMAND", {"Command": code, "Arg": arg})
         sig = self.wait_for("COMMAND_ACK", lambda s: s["Command"] == code and s["Arg"] == arg)
