@@ -42,6 +42,8 @@ from . import scenario as scn
 from .options import NOISE_LIMIT_HELP, OptionError, noise_limit, out_dir, out_file
 from .report import print_summary
 from .rig import Rig
+from .rig_lib import BUILD_HINT as BUILD_HINT  # one preset builds libpma_rig.so and libpma_offline.so
+from .rig_lib import open_library
 from .rig_params import RigParams, parse_text
 from .scenario import RULE_PARAMS, Scenario, ScenarioError, protocol
 from .summary import PHASE_ARMED, PHASE_IDLE, PHASE_RUNNING, LaneResult, Recorder, jsonable, summarise
@@ -49,7 +51,6 @@ from .summary import PHASE_ARMED, PHASE_IDLE, PHASE_RUNNING, LaneResult, Recorde
 REPO = Path(__file__).resolve().parents[1]
 LIB_PATH = Path(os.environ.get("PMA_OFFLINE_LIB",
                                REPO / "build/host-offline/firmware/targets/offline/libpma_offline.so"))
-BUILD_HINT = "cmake --preset host-offline && cmake --build --preset host-offline"
 API_VERSION = 2                 # PMA_OFFLINE_API_VERSION in pma_offline.h
 HOST_HEARTBEAT_PERIOD_S = 0.1   # as the runner: every 100 ms of control time
 EXTRA_TICKS = 5                 # as the runner: ticks after the run, so a last-tick fault shows
@@ -106,12 +107,7 @@ _TELEM_KEYS = [key for _, fields in _TELEM_BITS for _, key in fields]
 
 
 def _load(path: Path) -> ctypes.CDLL:
-    if not path.exists():
-        raise OfflineError(f"{path} not found: build it first ({BUILD_HINT})")
-    try:
-        lib = ctypes.CDLL(str(path))
-    except OSError as e:
-        raise OfflineError(f"cannot load {path}: {e}") from e
+    lib = open_library(path, OfflineError)
     u8, u16, i32, dbl = ctypes.c_uint8, ctypes.c_uint16, ctypes.c_int, ctypes.c_double
     sigs: dict[str, tuple[Any, list[Any]]] = {
         "pma_offline_api_version": (i32, []),

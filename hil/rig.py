@@ -29,18 +29,22 @@ Model (docs/rig.md has the values and their sources):
 * Integration: fixed-step classical RK4, sub-steps of at most params.substep_s,
   split exactly at every event (a delayed command taking effect, the
   disturbance switching on), so the input is smooth inside every sub-step.
-  Time is kept in integer nanoseconds.
+  Time is kept in integer nanoseconds. The right-hand side and its RK4 steps are
+  C (hil/rig_core, libpma_rig.so: hil/rig_lib.py): this module keeps the
+  parameters, the regulator's dead time and events, the sensor and the static model.
 """
 
 from __future__ import annotations
 
 import copy
+import ctypes
 import math
 from collections import deque
 from typing import Any, Mapping
 
 import numpy as np
 
+from . import rig_lib
 from .rig_params import (
     CreepParams,
     DriftParams,
@@ -116,13 +120,12 @@ class Rig:
         self._p_set = self.regulator_static_kpa(p_init)
         xs = self.static_xs_mm(self._p_set)
         # state: xs [mm], v [mm/s], P [kPa], y (sensor) [mm], z_i (hysteresis) [mm]
-        self._s = [xs, 0.0, self._p_set, xs] + [0.0] * self._n_hyst
+        s = [xs, 0.0, self._p_set, xs] + [0.0] * self._n_hyst
         # The extended model (docs/rig.md, "Against a real muscle"): the flow-limited
         # valve and/or creep. Off in the nominal profile, whose code path and
         # arithmetic stay exactly those of the three-element rig above.
         v, c = p.valve, p.creep
         self._ext = v.model == "flow" or c.frac_contract > 0.0 or c.frac_relax > 0.0
-        self._f = self._rhs_ext if self._ext else self._rhs
         if self._ext:
             self._flow = v.model == "flow"
             self._dead_rise_ns = _ns(v.dead_time_rise_s if self._flow else p.regulator.dead_time_s)
@@ -133,9 +136,33 @@ class Rig:
             self._seq_applied = 0
             self._last_sent = self._p_set
             # extra state: the valve's slow pilot set point q [kPa], the creep element Fc [N]
-            self._s += [self._p_set, self._f_pos(self._p_set)]
-        self._cache()
+            s += [self._p_set, self._f_pos(self._p_set)]
+        self._bind(s)
         self._update_substep()
+
+    def _bind(self, state: list[float]) -> None:
+        """The state and the C model (libpma_rig.so) from the Python attributes."""
+        self._s = rig_lib.State(*state)     # advanced in place by libpma_rig.so
+        self._lib = rig_lib.library()
+        self._model = rig_lib.Model()
+        self._model_p = ctypes.pointer(self._model)
+        self._advance = self._lib.pma_rig_advance
+        self._cache()
+        self._sync_disturbance()
+
+    _NATIVE = ("_s", "_lib", "_model", "_model_p", "_advance", "_dist_arrays")
+
+    def __getstate__(self) -> dict[str, Any]:
+        """Picklable (a run's result crosses processes): the ctypes objects as plain data."""
+        d = {k: v for k, v in self.__dict__.items() if k not in self._NATIVE}
+        d["_state_list"] = list(self._s)[:rig_lib.state_len(self._model)]
+        return d
+
+    def __setstate__(self, d: dict[str, Any]) -> None:
+        d = dict(d)
+        state = d.pop("_state_list")
+        self.__dict__.update(d)
+        self._bind(state)
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any] | None, seed: int = 0) -> "Rig":
@@ -192,7 +219,21 @@ class Rig:
         # each switch starts from the value the profile had just before it
         self._d_events = []
         for t, f in events:
+            self._sync_disturbance()
             self._d_events.append((t, f, self._disturbance_at(t * 1e-9)))
+        self._sync_disturbance()
+
+    def _sync_disturbance(self) -> None:
+        """The disturbance's switch events into the C model (arrays it points to, kept here)."""
+        ev = self._d_events
+        n = max(1, len(ev))
+        self._dist_arrays = ((ctypes.c_int64 * n)(*[e[0] for e in ev]), (ctypes.c_double * n)(*[e[1] for e in ev]),
+                             (ctypes.c_double * n)(*[e[2] for e in ev]))
+        m = self._model
+        m.dist_t_ns = ctypes.cast(self._dist_arrays[0], ctypes.POINTER(ctypes.c_int64))
+        m.dist_target_n = ctypes.cast(self._dist_arrays[1], ctypes.POINTER(ctypes.c_double))
+        m.dist_start_n = ctypes.cast(self._dist_arrays[2], ctypes.POINTER(ctypes.c_double))
+        m.n_dist = len(ev)
 
     def break_wire(self, on: bool = True) -> None:
         """Sensor cable cut: the loop current drops to 0 mA."""
@@ -245,98 +286,63 @@ class Rig:
 
     # ------------------------------------------------------------ integration
     def step(self, dt_s: float) -> None:
-        """Advance the rig by dt_s seconds (RK4 sub-steps, split at events)."""
+        """Advance the rig by dt_s seconds (RK4 sub-steps, split at events): libpma_rig.so
+        integrates up to the next regulator set point that takes effect, then it does."""
         if dt_s < 0:
             raise ValueError("dt must be >= 0")
-        if self._ext:
-            self._step_ext(dt_s)
-            return
         end = self._t_ns + _ns(dt_s)
-        h_ns = self._h_ns
+        queues = (self._q_rise, self._q_fall) if self._ext else (self._queue,)
         while self._t_ns < end:
             t = self._t_ns
-            nxt = min(end, t + h_ns)
-            if self._queue and self._queue[0][0] < nxt:
-                nxt = max(self._queue[0][0], t)
-            for t_ev, _, _ in self._d_events:
-                if t < t_ev < nxt:
-                    nxt = t_ev
-                    break
-            d_knee = self._drift_knee_ns
-            if d_knee is not None and t < d_knee < nxt:
-                nxt = d_knee
-            if nxt > t:
-                self._rk4(t * 1e-9, (nxt - t) * 1e-9)
-                self._t_ns = nxt
-            while self._queue and self._queue[0][0] <= self._t_ns:
-                self._p_set = self._queue.popleft()[1]
+            stop = end
+            for q in queues:
+                if q and q[0][0] < stop:
+                    stop = max(q[0][0], t)
+            if stop > t:
+                self._advance(self._model_p, self._s, t, stop, self._h_ns, self._p_set)
+                self._t_ns = stop
+            if self._ext:
+                self._apply_due_ext()
+            else:
+                while self._queue and self._queue[0][0] <= self._t_ns:
+                    self._p_set = self._queue.popleft()[1]
 
     def _cache(self) -> None:
-        """Copy the constants the right-hand side needs into plain floats (speed)."""
+        """The constants of the right-hand side into the C model (rig_lib.Model)."""
         p = self.params
-        m, d = p.muscle, p.drift
-        self._c_f0, self._c_f1, self._c_fw2 = m.f0_n, m.f1_n_per_kpa, m.f_clip_width_n ** 2
-        self._c_kb = m.k_break_kpa
-        self._c_kw = m.k_blend_kpa
+        m, d, c = p.muscle, p.drift, self._model
+        c.f0_n, c.f1_n_per_kpa, c.f_clip_width_sq_n2 = m.f0_n, m.f1_n_per_kpa, m.f_clip_width_n ** 2
+        c.k_break_kpa, c.k_blend_kpa = m.k_break_kpa, m.k_blend_kpa
         ks = m.stiffness_scale
-        self._c_klo = (ks * m.k0_low_n_per_mm, ks * m.k1_low_n_per_mm_kpa)
-        self._c_khi = (ks * m.k0_high_n_per_mm, ks * m.k1_high_n_per_mm_kpa)
-        self._c_bmid = 0.5 * (m.b_contract_ns_per_mm + m.b_relax_ns_per_mm)
-        self._c_bhalf = 0.5 * (m.b_contract_ns_per_mm - m.b_relax_ns_per_mm)
-        self._c_bv = m.b_blend_mm_s
-        self._c_h = m.hyst_force_n
-        self._c_hr = m.hyst_ramp_n
-        self._c_hd = tuple(m.hyst_delta_mm)
-        self._c_hwd = tuple(w / dl for w, dl in zip(m.hyst_weights, m.hyst_delta_mm))
-        self._c_dr = (d.temp_rate_k_per_s, d.temp_max_rise_k, d.f_per_k, d.k_per_k, d.b_per_k)
-        self._c_tau_p = p.regulator.tau_s
-        self._c_tau_y = p.sensor.tau_s
-        self._c_w_static = self._mass * p.load.g_m_s2 * self._sin_incl + self._bias
-        self._c_acc = 1000.0 / self._mass
+        c.k0_low_n_per_mm, c.k1_low_n_per_mm_kpa = ks * m.k0_low_n_per_mm, ks * m.k1_low_n_per_mm_kpa
+        c.k0_high_n_per_mm, c.k1_high_n_per_mm_kpa = ks * m.k0_high_n_per_mm, ks * m.k1_high_n_per_mm_kpa
+        c.b_mid_ns_per_mm = 0.5 * (m.b_contract_ns_per_mm + m.b_relax_ns_per_mm)
+        c.b_half_ns_per_mm = 0.5 * (m.b_contract_ns_per_mm - m.b_relax_ns_per_mm)
+        c.b_blend_mm_s = m.b_blend_mm_s
+        c.hyst_force_n, c.hyst_ramp_n = m.hyst_force_n, m.hyst_ramp_n
+        c.n_hyst = self._n_hyst
+        for i, (w, dl) in enumerate(zip(m.hyst_weights, m.hyst_delta_mm)):
+            c.hyst_delta_mm[i], c.hyst_w_per_delta_per_mm[i] = dl, w / dl
+        c.drift_rate_k_per_s, c.drift_max_rise_k = d.temp_rate_k_per_s, d.temp_max_rise_k
+        c.drift_f_per_k, c.drift_k_per_k, c.drift_b_per_k = d.f_per_k, d.k_per_k, d.b_per_k
+        knee = self._drift_knee_ns
+        c.drift_knee_ns = -1 if knee is None else knee
+        c.tau_p_s, c.tau_y_s = p.regulator.tau_s, p.sensor.tau_s
+        c.w_static_n = self._mass * p.load.g_m_s2 * self._sin_incl + self._bias
+        c.acc_mm_s2_per_n = 1000.0 / self._mass
+        c.dist_tau_s = p.load.disturbance_tau_s
+        c.ext, c.flow = int(self._ext), int(self._ext and self._flow)
         if self._ext:
-            self._cache_ext()
-
-    def _rk4(self, t: float, h: float) -> None:
-        s = self._s
-        f = self._f
-        hh = 0.5 * h
-        k1 = f(t, s)
-        k2 = f(t + hh, [a + hh * b for a, b in zip(s, k1)])
-        k3 = f(t + hh, [a + hh * b for a, b in zip(s, k2)])
-        k4 = f(t + h, [a + h * b for a, b in zip(s, k3)])
-        h6 = h / 6.0
-        self._s = [a + h6 * (b + 2.0 * (c + d) + e) for a, b, c, d, e in zip(s, k1, k2, k3, k4)]
-
-    def _rhs(self, t: float, s: list[float]) -> list[float]:
-        xs, v, pr, y = s[0], s[1], s[2], s[3]
-        rate, dmax, cf, ck, cb = self._c_dr
-        dT = (rate * t if rate * t < dmax else dmax) if rate > 0.0 else 0.0
-        f = self._c_f0 + self._c_f1 * pr
-        force = 0.5 * (f + math.sqrt(f * f + self._c_fw2)) * (1.0 + cf * dT)
-        u = (pr - self._c_kb) / self._c_kw
-        k_lo = self._c_klo[0] - self._c_klo[1] * pr
-        k_hi = self._c_khi[0] - self._c_khi[1] * pr
-        k = (k_lo + (k_hi - k_lo) * 0.5 * (1.0 + u / math.sqrt(u * u + 1.0))) * (1.0 + ck * dT)
-        b = (self._c_bmid + self._c_bhalf * math.tanh(v / self._c_bv)) * (1.0 + cb * dT)
-        w_load = self._c_w_static
-        if self._d_events:
-            w_load += self._disturbance_at(t)
-        if self._c_h > 0.0:
-            av = abs(v)
-            acc = 0.0
-            out = [v, 0.0, 0.0, 0.0]
-            for z, dl, wd in zip(s[4:], self._c_hd, self._c_hwd):
-                acc += wd * z
-                out.append(v - av * z / dl)
-            fh = self._c_h * (1.0 - math.exp(-force / self._c_hr)) * acc
-        else:
-            out = [v, 0.0, 0.0, 0.0] + [0.0] * self._n_hyst
-            fh = 0.0
-        out[1] = self._c_acc * (force - k * xs - b * v - fh - w_load)
-        out[2] = (self._p_set - pr) / self._c_tau_p
-        out[3] = (xs - y) / self._c_tau_y if self._c_tau_y > 0.0 else v
-        return out
-
+            v, cr = p.valve, p.creep
+            c.creep_frac_contract, c.creep_frac_relax = cr.frac_contract, cr.frac_relax
+            c.creep_inv_tau_contract_per_s, c.creep_inv_tau_relax_per_s = 1.0 / cr.tau_contract_s, 1.0 / cr.tau_relax_s
+            c.creep_blend_sq_n2 = cr.blend_n ** 2
+            c.slow_weight_rise, c.slow_weight_fall = v.slow_weight_rise, v.slow_weight_fall
+            c.slow_inv_tau_rise_per_s, c.slow_inv_tau_fall_per_s = 1.0 / v.slow_tau_rise_s, 1.0 / v.slow_tau_fall_s
+            c.valve_band_kpa, c.valve_fill_rate_kpa_s = v.p_band_kpa, v.fill_rate_kpa_s
+            c.valve_exhaust_rate_kpa_s, c.valve_supply_abs_kpa = v.exhaust_rate_kpa_s, v.supply_kpa + v.atm_kpa
+            c.valve_atm_kpa, c.valve_b_critical = v.atm_kpa, v.b_critical
+            c.valve_volume_gain_per_mm, c.valve_polytropic_n = v.volume_gain_per_mm, v.polytropic_n
 
     # ------------------------------------------------- the extended model
     def _enqueue_ext(self, p_set: float) -> None:
@@ -362,104 +368,6 @@ class Rig:
                     best_seq, best_p = seq, p_set
         self._seq_applied, self._p_set = best_seq, best_p
 
-    def _step_ext(self, dt_s: float) -> None:
-        end = self._t_ns + _ns(dt_s)
-        h_ns = self._h_ns
-        while self._t_ns < end:
-            t = self._t_ns
-            nxt = min(end, t + h_ns)
-            for q in (self._q_rise, self._q_fall):
-                if q and q[0][0] < nxt:
-                    nxt = max(q[0][0], t)
-            for t_ev, _, _ in self._d_events:
-                if t < t_ev < nxt:
-                    nxt = t_ev
-                    break
-            d_knee = self._drift_knee_ns
-            if d_knee is not None and t < d_knee < nxt:
-                nxt = d_knee
-            if nxt > t:
-                self._rk4(t * 1e-9, (nxt - t) * 1e-9)
-                self._t_ns = nxt
-            self._apply_due_ext()
-
-    def _cache_ext(self) -> None:
-        p = self.params
-        v, c = p.valve, p.creep
-        self._e_creep = (c.frac_contract, c.frac_relax, 1.0 / c.tau_contract_s, 1.0 / c.tau_relax_s, c.blend_n ** 2)
-        self._e_slow = (v.slow_weight_rise, v.slow_weight_fall, 1.0 / v.slow_tau_rise_s, 1.0 / v.slow_tau_fall_s)
-        self._e_valve = (v.p_band_kpa, v.fill_rate_kpa_s, v.exhaust_rate_kpa_s, v.supply_kpa + v.atm_kpa,
-                         v.atm_kpa, v.b_critical, v.volume_gain_per_mm, v.polytropic_n)
-
-    @staticmethod
-    def _iso6358(ratio: float, b: float) -> float:
-        """Relative flow of an orifice at downstream/upstream pressure ratio (1: choked)."""
-        if ratio <= b:
-            return 1.0
-        if ratio >= 1.0:
-            return 0.0
-        r = (ratio - b) / (1.0 - b)
-        return math.sqrt(1.0 - r * r)
-
-    def _rhs_ext(self, t: float, s: list[float]) -> list[float]:
-        """The three-element right-hand side of _rhs with creep and the valve."""
-        nh = self._n_hyst
-        xs, v, pr = s[0], s[1], s[2]
-        q, fc = s[4 + nh], s[5 + nh]
-        rate, dmax, cf, ck, cb = self._c_dr
-        dT = (rate * t if rate * t < dmax else dmax) if rate > 0.0 else 0.0
-        f = self._c_f0 + self._c_f1 * pr
-        f_pos = 0.5 * (f + math.sqrt(f * f + self._c_fw2))
-        # creep: part of the contractile force arrives through a first-order lag
-        fr_c, fr_r, it_c, it_r, bl2 = self._e_creep
-        d = f_pos - fc
-        sw = 0.5 * (1.0 + d / math.sqrt(d * d + bl2))  # 1 contracting, 0 relaxing
-        d_fc = d * (it_r + (it_c - it_r) * sw)
-        force = (f_pos - (fr_r + (fr_c - fr_r) * sw) * d) * (1.0 + cf * dT)
-        u = (pr - self._c_kb) / self._c_kw
-        k_lo = self._c_klo[0] - self._c_klo[1] * pr
-        k_hi = self._c_khi[0] - self._c_khi[1] * pr
-        k = (k_lo + (k_hi - k_lo) * 0.5 * (1.0 + u / math.sqrt(u * u + 1.0))) * (1.0 + ck * dT)
-        b = (self._c_bmid + self._c_bhalf * math.tanh(v / self._c_bv)) * (1.0 + cb * dT)
-        w_load = self._c_w_static
-        if self._d_events:
-            w_load += self._disturbance_at(t)
-        out = [v, 0.0, 0.0, 0.0]
-        fh = 0.0
-        if self._c_h > 0.0:
-            av = abs(v)
-            acc = 0.0
-            for z, dl, wd in zip(s[4:4 + nh], self._c_hd, self._c_hwd):
-                acc += wd * z
-                out.append(v - av * z / dl)
-            fh = self._c_h * (1.0 - math.exp(-force / self._c_hr)) * acc
-        else:
-            out += [0.0] * nh
-        out[1] = self._c_acc * (force - k * xs - b * v - fh - w_load)
-        out[3] = (xs - s[3]) / self._c_tau_y if self._c_tau_y > 0.0 else v
-        # the valve's set point: part of a step at once, the rest through the slow pilot
-        w_r, w_f, iq_r, iq_f = self._e_slow
-        dq = self._p_set - q
-        swq = 0.5 * (1.0 + dq / math.sqrt(dq * dq + 1.0))  # 1 rising, 0 falling (1 kPa blend)
-        target = self._p_set - (w_f + (w_r - w_f) * swq) * dq
-        d_q = dq * (iq_f + (iq_r - iq_f) * swq)
-        if self._flow:
-            band, r_fill, r_exh, p_sup_abs, p_atm, bc, cv, n_poly = self._e_valve
-            e = (target - pr) / band
-            opening = e / math.sqrt(1.0 + e * e)
-            p_abs = pr + p_atm
-            if opening >= 0.0:
-                dp = r_fill * opening * self._iso6358(p_abs / p_sup_abs, bc)
-            else:
-                dp = r_exh * opening * (p_abs / p_sup_abs) * self._iso6358(p_atm / p_abs if p_abs > 0.0 else 1.0, bc)
-            vol = 1.0 + cv * xs
-            vol = vol if vol > 0.2 else 0.2
-            out[2] = (dp - n_poly * p_abs * cv * v) / vol
-        else:
-            out[2] = (target - pr) / self._c_tau_p
-        out += [d_q, d_fc]
-        return out
-
     # ------------------------------------------------------- model functions
     def _f_pos(self, p_kpa: float) -> float:
         """Contractile element F(P) [N], smoothly clipped at zero."""
@@ -470,7 +378,8 @@ class Rig:
 
     def _k_of_p(self, p_kpa: float) -> float:
         """Spring K(P) [N/mm]: the low and high pressure branches, blended over
-        +-k_blend_kpa around the break so that K is smooth (same as in _rhs)."""
+        +-k_blend_kpa around the break so that K is smooth (as the dynamics in
+        hil/rig_core/pma_rig_core.c)."""
         m = self.params.muscle
         u = (p_kpa - m.k_break_kpa) / m.k_blend_kpa
         k_lo = m.k0_low_n_per_mm - m.k1_low_n_per_mm_kpa * p_kpa
@@ -496,16 +405,9 @@ class Rig:
         return None
 
     def _disturbance_at(self, t: float) -> float:
-        """The cylinder's force at time t: after each switch it moves from its
-        value before the switch towards the new target with load.disturbance_tau_s."""
-        value = 0.0
-        tau = self.params.load.disturbance_tau_s
-        for t_ev, target, start in self._d_events:
-            t_on = t_ev * 1e-9
-            if t < t_on:
-                break
-            value = target if tau <= 0 else target + (start - target) * math.exp(-(t - t_on) / tau)
-        return value
+        """The cylinder's force [N] at time t [s]: after each switch it moves from its value
+        before the switch towards the new target with load.disturbance_tau_s."""
+        return float(self._lib.pma_rig_disturbance_n(self._model_p, t))
 
     def _regulator_map(self, p_cmd: float) -> float:
         """Backlash (the regulator's hysteresis) then its linearity error."""

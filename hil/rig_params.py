@@ -19,6 +19,8 @@ import numbers
 from dataclasses import dataclass, field
 from typing import Any, Mapping
 
+from .rig_lib import MAX_HYST
+
 # ---------------------------------------------------------------------------
 # Published numbers (see docs/rig.md, "Sources"). Nothing here is tuned.
 # ---------------------------------------------------------------------------
@@ -373,6 +375,8 @@ class RigParams:
             (len(m.hyst_delta_mm) == len(m.hyst_weights), "muscle.hyst_weights",
              "hyst_delta_mm (> 0) and hyst_weights need the same length"),
             (all(dl > 0 for dl in m.hyst_delta_mm), "muscle.hyst_delta_mm", "every element must be > 0"),
+            (len(m.hyst_delta_mm) <= MAX_HYST, "muscle.hyst_delta_mm",
+             f"at most {MAX_HYST} elements (PMA_RIG_MAX_HYST, hil/rig_core)"),
             (all(w >= 0 for w in m.hyst_weights), "muscle.hyst_weights", "every element must be >= 0"),
             (ld.mass_kg > 0, "load.mass_kg", "must be > 0"),
             (-90 <= ld.incline_deg <= 90, "load.incline_deg", "must be in [-90, 90]"),

@@ -48,6 +48,7 @@ from .summary import PHASE_ARMED, PHASE_IDLE, PHASE_RUNNING, TELEM_FIELDS, LaneR
 
 REPLY_TIMEOUT_S = 10.0
 LOCKSTEP_WATCHDOG_MS = 10000  # pma-fw-host --watchdog-ms for HIL nodes (wall time; see _start_firmware)
+LOG_BATCH = 1024              # frames kept before they go to the bus log (and at the end, however the run ends)
 TIMED_EVERY = 64              # the benchmark's split of a tick is timed on every 64th tick (4 clock reads)
 
 
@@ -101,10 +102,13 @@ class Lane:
     start_result: str = ""
     last_dac: int = 0
     last_active: int = 0
+    last_counts: int = 0    # this tick's sample (PLANT_SENSOR RawCounts)
+    last_status: int = 0    # this tick's PLANT_ACTUATOR Sample
     repeated_dac: list[int] = field(default_factory=list)   # --board: commands of ticks without a new sample
     repeated_ticks: int = 0                                   # --board: how many, over the run
     telem: dict[str, list[float]] = field(default_factory=dict)
     telem_row: dict[str, float] = field(default_factory=dict)
+    telem_frames: list[tuple[str, bytes]] = field(default_factory=list)  # received, not yet decoded
     params_read_back: dict[str, float | int] = field(default_factory=dict)  # every parameter, after configuring
     identity: dict[str, Any] = field(default_factory=dict)  # the node's DEVICE_INFO (pmactl.identity)
     sink: deque[can.Message] | None = None   # while commissioning: the node's frames for its LaneBus
@@ -177,6 +181,7 @@ class Runner:
         self.lanes: list[Lane] = []
         self.bus: can.BusABC | None = None
         self.logger: can.Listener | None = None
+        self.log_queue: list[can.Message] = []
         self.tick = 0
         self.period_s = 1.0
         self.interrupted = False
@@ -245,7 +250,18 @@ class Runner:
 
     def _log(self, msg: can.Message) -> None:
         if self.logger is not None:
-            self.logger.on_message_received(msg)
+            self.log_queue.append(msg)
+            if len(self.log_queue) >= LOG_BATCH:
+                self._flush_log()
+
+    def _flush_log(self) -> None:
+        """The frames kept so far into the bus log: a tick's own frames then cost a list append
+        (in the vcan guest the log writer's code, cold after the tick's system calls, costs
+        several times more per frame than in a block)."""
+        if self.logger is not None:
+            for m in self.log_queue:
+                self.logger.on_message_received(m)
+        self.log_queue.clear()
 
     def _start_firmware(self) -> None:
         if self.opts.board:
@@ -363,6 +379,7 @@ class Runner:
             lane.commissioning = jsonable({**result.report(), "control_ticks": bus.ticks})
             lane.rig = Rig(self.sc.rig_params(), seed=self.sc.seed)     # (lane.seq goes on: the node counts it)
             lane.telem, lane.telem_row = {}, {}     # the run's telemetry starts at the run
+            lane.telem_frames.clear()
         self.sc = dataclasses.replace(self.sc, controllers=[lane.ctrl for lane in self.lanes])
 
     @staticmethod
@@ -425,7 +442,7 @@ class Runner:
         if self.opts.board:
             self._collect_repeats()
         for lane in self.lanes:
-            rec.data[lane.index]["counts"][rec.n] = self._send_sample(lane)
+            lane.last_counts = self._send_sample(lane)
         pending = {lane.index for lane in self.lanes}
         prev_seq = {lane.index: (lane.seq - 1) & 0xFF for lane in self.lanes}
         timed = self.tick % TIMED_EVERY == 0
@@ -453,37 +470,28 @@ class Runner:
                 continue
             pending.discard(i)
             lane.last_dac, lane.last_active = int(sig["DacCounts"]), int(sig["OutputActive"])
-            r = rec.data[i]
-            r["dac_counts"][rec.n] = lane.last_dac
-            r["output_active"][rec.n] = lane.last_active
-            r["sample_status"][rec.n] = int(sig["Sample"])
+            lane.last_status = int(sig["Sample"])
         if timed:
             t_rig = time.perf_counter()
         skipped_ticks = 0   # --board: the most board ticks any lane had before this sample's
         for lane in self.lanes:
             rig = lane.rig
-            r = rec.data[lane.index]
-            k = rec.n
             skipped_ticks = max(skipped_ticks, len(lane.repeated_dac))
-            r["phase"][k] = phase
-            r["run_step"][k] = run_step + len(lane.repeated_dac) if run_step >= 0 else run_step
+            step = run_step + len(lane.repeated_dac) if run_step >= 0 else run_step
             for dac in lane.repeated_dac:           # --board: ticks the rig lived through meanwhile
                 rig.apply_dac(dac)
                 rig.step(self.period_s)
             lane.repeated_ticks += len(lane.repeated_dac)
             lane.repeated_dac.clear()
             rig.apply_dac(lane.last_dac)
-            r["x_true_cm"][k] = rig.x_cm
-            r["v_true_cm_s"][k] = rig.v_cm_s
-            r["p_kpa"][k] = rig.p_kpa
-            r["p_cmd_kpa"][k] = rig.p_cmd_kpa
-            r["load_mass_kg"][k] = rig.load_mass_kg
-            r["disturbance_n"][k] = rig.disturbance_force_n
+            rec.add(lane.index, (lane.last_counts, lane.last_dac, lane.last_active, lane.last_status, phase, step,
+                                 rig.x_cm, rig.v_cm_s, rig.p_kpa, rig.p_cmd_kpa, rig.load_mass_kg,
+                                 rig.disturbance_force_n))
             rig.step(self.period_s)
         if timed:
             self.t_rig_s += time.perf_counter() - t_rig
             self.timed_ticks += 1
-        rec.n += 1
+        rec.end_tick()
         self.tick += 1
         return skipped_ticks
 
@@ -520,20 +528,33 @@ class Runner:
         return lane, self.proto.decode("PLANT_ACTUATOR", bytes(msg.data))
 
     def _other_frame(self, lane: Lane, name: str, msg: can.Message) -> None:
+        if name.startswith("TELEM_"):       # decoded after the run (_telemetry): not in the tick
+            lane.telem_frames.append((name, bytes(msg.data)))
+            return
         try:
             sig = self.proto.decode(name, bytes(msg.data))
         except Exception:       # a frame of the wrong length: the bus log keeps it
             return
         if name == "HEARTBEAT":
             self._note_heartbeat(lane, sig)
-        elif name.startswith("TELEM_"):
+
+    def _telemetry(self, lane: Lane) -> dict[str, list[float]]:
+        """The lane's telemetry frames received so far, as signals (TELEM_FIELDS): one row per
+        telemetry group (mask 0x1F), a field missing from a group NaN."""
+        for name, data in lane.telem_frames:
+            try:
+                sig = self.proto.decode(name, data)
+            except Exception:       # a frame of the wrong length: the bus log keeps it
+                continue
             for (m, s), key in TELEM_FIELDS.items():
                 if m == name:
                     lane.telem_row[key] = float(sig[s])
-            if name == "TELEM_E":      # the last of a telemetry group (mask 0x1F)
+            if name == "TELEM_E":      # the last of a telemetry group
                 for key in TELEM_FIELDS.values():
                     lane.telem.setdefault(key, []).append(lane.telem_row.get(key, math.nan))
                 lane.telem_row = {}
+        lane.telem_frames.clear()
+        return lane.telem
 
     def _check_alive(self) -> None:
         for lane in self.lanes:
@@ -673,6 +694,7 @@ class Runner:
                 except AssertionError as e:
                     self.errors.append(f"node {lane.node}: {e}")
         if self.logger is not None:
+            self._flush_log()
             self.logger.stop()
             self.logger = None
         if self.bus is not None:
@@ -690,7 +712,8 @@ class Runner:
                 ctrl=lane.ctrl, node=lane.node, rig=lane.rig, params=lane.params,
                 params_read_back=lane.params_read_back, state=state, fault_code=fault,
                 start_result=lane.start_result, final_dac=dac, final_active=active,
-                data=rec.trimmed(lane.index) if rec is not None and rec.n > 0 else None, telem=lane.telem,
+                data=rec.trimmed(lane.index) if rec is not None and rec.n > 0 else None,
+                telem=self._telemetry(lane),
                 repeated_ticks=lane.repeated_ticks if self.opts.board else None))
         return summarise(self.sc, lanes, quick=self.opts.quick, duration_s=duration, period_s=self.period_s,
                          errors=self.errors, interrupted=self.interrupted, benchmark=self.bench, wall_s=wall_s,

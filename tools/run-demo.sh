@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: Apache-2.0
 # The main job, from a fresh Debian 12 / Ubuntu machine: set-up, build of the host
-# firmware (pma-fw-host), then the paper's Case 3 in the HIL harness: the paper's
+# firmware (pma-fw-host) and of the simulated rig's dynamics (libpma_rig.so), then the paper's Case 3 in the HIL harness: the paper's
 # controller and MFAC, each on its own pma-fw-host node in lockstep over vcan
 # (through hil/with-vcan when the kernel has no SocketCAN), against identical
 # simulated rigs; prints the Table 2 comparison and writes figures. Before ARM each of the
@@ -27,8 +27,10 @@ for a in "$@"; do
 done
 if ((setup)); then
   bash tools/setup.sh
-  cmake --preset host-ubsan >/dev/null
-  cmake --build --preset host-ubsan
+  for preset in host-ubsan host-offline; do     # pma-fw-host; libpma_rig.so (hil/rig.py)
+    cmake --preset "$preset" >/dev/null
+    cmake --build --preset "$preset"
+  done
 fi
 out=${OUT:-build/hil/case3}
 ctrls=(--controller ppc --controller mfac --commission)

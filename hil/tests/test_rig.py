@@ -498,3 +498,41 @@ def test_rig_values_from_the_command_line_are_parsed_by_their_type():
                                 ("muscle.hyst_weights", "1", "array")]:
         with pytest.raises(ValueError, match=message):
             parse_text(path, text)
+
+
+# ------------------------------------------------------- libpma_rig.so (hil/rig_core)
+def test_a_rig_pickled_or_copied_mid_run_goes_on_exactly_as_the_original():
+    """A run's result crosses processes with its rig (hil/offline.py --jobs): the state in the C
+    library's arrays, the disturbance profile and the queued commands survive the copy."""
+    import copy
+    import pickle
+
+    from hil.rig_profiles import profile_dict
+    for data in ({}, profile_dict("dmsp10")):
+        rig = Rig.from_dict(data, seed=4)
+        rig.set_disturbance(15.0)
+        for k in range(300):
+            rig.apply_dac(1500 + 5 * k)
+            rig.step(DT)
+        copies = [pickle.loads(pickle.dumps(rig)), copy.deepcopy(rig)]
+        for r in [rig, *copies]:
+            for k in range(300):
+                r.apply_dac(3000 - 3 * k)
+                r.step(DT)
+        assert all(r.state() == rig.state() and r.sensor_counts() == rig.sensor_counts() for r in copies)
+
+
+def test_more_hysteresis_elements_than_the_c_model_holds_are_refused_by_name():
+    from hil.rig_lib import MAX_HYST
+    n = MAX_HYST + 1
+    with pytest.raises(ValueError, match="muscle.hyst_delta_mm.*at most"):
+        RigParams.from_dict({"muscle": {"hyst_delta_mm": [0.1] * n, "hyst_weights": [1.0 / n] * n}})
+
+
+def test_a_missing_or_foreign_rig_library_says_how_to_build_it(tmp_path):
+    from hil.rig_lib import BUILD_HINT, RigLibError, _load
+    with pytest.raises(RigLibError, match="not found.*" + BUILD_HINT.split()[0]):
+        _load(tmp_path / "libpma_rig.so")
+    (tmp_path / "bad.so").write_bytes(b"not an ELF file")
+    with pytest.raises(RigLibError, match="cannot load"):
+        _load(tmp_path / "bad.so")
