@@ -15,7 +15,10 @@ same rig).
   in charge, never before the lost tick): docs/controllers.md, "When the guarantee is lost";
 - the band is never left (no sample at or beyond a position constraint);
 - the paper's cases do not chatter: the pressure command's total variation under CHATTER_MAX
-  times what the reference needs;
+  times what the reference needs on that rig (chatter_ratio_hysteretic: a muscle with friction
+  and a regulator with backlash need the command to cross both loops' width at every reversal,
+  which the frictionless static curve of chatter_ratio does not count: on twice the nominal
+  hysteresis a loop that moved the valve exactly as needed scores 3.0 on that one);
 - the paper's controller tracks at least as well as MFAC: RMSTE at most MFAC's in every window,
   level within 0.1 % (MFAC_SLACK: two lanes held at the same input limit);
 - Case 3 (the paper's Table 2): where the guarantee held, the paper's controller at least
@@ -110,10 +113,20 @@ def band_failures(s: Summary) -> list[str]:
 
 
 def chatter_failures(s: Summary, task: str) -> list[str]:
+    """The paper's cases: the command's total variation over what the reference needs on the
+    rig (the hysteretic need; the frictionless one where the rig has no such figure)."""
     if task not in PAPER_CASES:
         return []
-    r = s["controllers"]["ppc"]["chatter_ratio"]
-    return [f"chatter ratio {r:.2f} >= {CHATTER_MAX:g}"] if r is None or r >= CHATTER_MAX else []
+    c = s["controllers"]["ppc"]
+    r = c.get("chatter_ratio_hysteretic")
+    if r is None:
+        r = c["chatter_ratio"]
+    if r is None or r >= CHATTER_MAX:
+        def fmt(x: float | None) -> str:
+            return "none" if x is None else f"{x:.2f}"
+        return [f"chatter ratio {fmt(r)} >= {CHATTER_MAX:g} over what the rig needs "
+                f"(over the frictionless static curve: {fmt(c['chatter_ratio'])})"]
+    return []
 
 
 def behind_mfac_failures(s: Summary) -> list[str]:

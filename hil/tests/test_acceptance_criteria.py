@@ -92,6 +92,22 @@ def test_chatter_is_a_criterion_of_the_paper_cases_only():
     assert not acceptance.chatter_failures(s, "case3 (quick)")
 
 
+def test_chatter_is_counted_over_what_the_rig_needs_where_the_summary_has_it():
+    """On a hysteretic rig even a perfect loop moves the valve more than the frictionless curve
+    needs: the criterion takes chatter_ratio_hysteretic, the plain ratio only without it."""
+    s = good_case3()
+    c = s["controllers"]["ppc"]
+    c.update(chatter_ratio=4.0, chatter_ratio_hysteretic=2.0)
+    assert not acceptance.chatter_failures(s, "case3")
+    c.update(chatter_ratio_hysteretic=3.2)
+    assert acceptance.chatter_failures(s, "case3") == [
+        "chatter ratio 3.20 >= 3 over what the rig needs (over the frictionless static curve: 4.00)"]
+    c.update(chatter_ratio_hysteretic=None)
+    assert acceptance.chatter_failures(s, "case3")
+    c.update(chatter_ratio=None)
+    assert acceptance.chatter_failures(s, "case3")
+
+
 def test_case_2b_enters_the_band_before_2a():
     a, b = good_case3(), good_case3()
     a["controllers"]["ppc"].update(t_u_s=6.0, time_to_band_s=4.0)

@@ -17,6 +17,8 @@ What must hold on every variant, whether or not the paper's guarantee can (docs/
   measured stroke), it holds;
 - where it is lost, the firmware says so: the GUARANTEE_LOST flag in TELEM_E from the lost tick
   on; the hand-over to MFAC (FALLBACK), if any, comes no earlier;
+- on the Case 3 variants, the valve does not chatter: the pressure command's total variation
+  under 3 times what the reference needs on that rig (acceptance.chatter_failures);
 - the lane tracks at least as well as MFAC on its own commissioned set on the same rig: its
   RMSTE at most MFAC's in every window, or level within 0.1 % (acceptance.MFAC_SLACK: two lanes held at
   the same input limit, where the reference is out of reach).
@@ -86,6 +88,13 @@ def test_guarantee_holds_where_feasible_or_its_loss_is_flagged(variant_runs, nam
     feasible = acceptance.reference_feasible(sc.reference, sc.duration_s, f["stroke_min_cm"], f["stroke_max_cm"],
                                              s["controllers"]["ppc"]["w1_cm"])
     assert not acceptance.guarantee_failures(s, feasible)
+
+
+@pytest.mark.parametrize("name", [n for n in VARIANTS if n.startswith("case3_")])
+def test_paper_controller_does_not_chatter(variant_runs, name):
+    """Case 3's valve motion under 3 times what the reference needs on that rig."""
+    _, s = variant_runs[name]
+    assert not acceptance.chatter_failures(s, "case3"), name
 
 
 @pytest.mark.parametrize("name", VARIANTS)
