@@ -271,7 +271,8 @@ def test_reference_feedforward_is_the_static_maps_slope_taken_tau_plus_theta_ahe
 def test_hysteresis_feedforward_is_a_part_of_the_maps_loop_over_the_dead_bands_width():
     """ppc.ref_ff_hyst: HYST_FF_PART of the half-width of the static map's loop (its median over the
     reference's range); ppc.ref_ff_hyst_cm: the smallest step gain times half that width (how far
-    the muscle moves while the pressure crosses the loop), at least HYST_PLAY_MIN_CM."""
+    the muscle moves while the pressure crosses the loop), at least what keeps the play within
+    HYST_SLOPE_MAX times the map's slope, and at least HYST_PLAY_MIN_CM."""
     p = [0.0, 200.0, 400.0, 600.0, 800.0]
     x_up = [-q / 400.0 for q in p]                   # the rising branch 120 kPa above the falling one
     x_down = [-(q + 120.0) / 400.0 for q in p]
@@ -288,7 +289,15 @@ def test_hysteresis_feedforward_is_a_part_of_the_maps_loop_over_the_dead_bands_w
     assert derive(m, task).params["ppc.ref_ff_hyst"] == 0.0
     m.static_map = StaticMap(p, x_up, p, x_down)
     m.steps[0].gain_cm_per_kpa = 0.0
-    assert derive(m, task).params["ppc.ref_ff_hyst_cm"] == pytest.approx(rules.HYST_PLAY_MIN_CM)
+    # the map's slope: 400 kPa per cm, 200 input units per cm at 2 kPa per unit
+    gentle = rules.HYST_FF_PART * 60.0 / 2.0 / (rules.HYST_SLOPE_MAX * 200.0)
+    assert derive(m, task).params["ppc.ref_ff_hyst_cm"] == pytest.approx(gentle, abs=1e-4)
+    # a muscle the pressure hardly moves (a steep map): down to the floor
+    steep = [-q / 40000.0 for q in p]
+    m.static_map = StaticMap(p, steep, p, [-(q + 120.0) / 40000.0 for q in p])
+    task_steep = Task(w1_cm=0.002, t_u_s=2.0, x_min_cm=-0.1, x_max_cm=0.0, x_ref_min_cm=-0.015,
+                      x_ref_max_cm=-0.007)
+    assert derive(m, task_steep).params["ppc.ref_ff_hyst_cm"] == pytest.approx(rules.HYST_PLAY_MIN_CM)
 
 
 def test_mfac_reset_threshold_is_a_tenth_of_the_measured_gain():
