@@ -121,12 +121,14 @@ def chatter_failures(s: Summary, task: str) -> list[str]:
     r = c.get("chatter_ratio_hysteretic")
     if r is None:
         r = c["chatter_ratio"]
-    if r is None or r >= CHATTER_MAX:
-        def fmt(x: float | None) -> str:
-            return "none" if x is None else f"{x:.2f}"
-        return [f"chatter ratio {fmt(r)} >= {CHATTER_MAX:g} over what the rig needs "
-                f"(over the frictionless static curve: {fmt(c['chatter_ratio'])})"]
-    return []
+    if r is not None and r < CHATTER_MAX:
+        return []
+    return [f"chatter ratio {_ratio_text(r)} >= {CHATTER_MAX:g} over what the rig needs "
+            f"(over the frictionless static curve: {_ratio_text(c['chatter_ratio'])})"]
+
+
+def _ratio_text(r: float | None) -> str:
+    return "none" if r is None else f"{r:.2f}"
 
 
 def behind_mfac_failures(s: Summary) -> list[str]:

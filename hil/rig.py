@@ -137,6 +137,8 @@ class Rig:
             self._last_sent = self._p_set
             # extra state: the valve's slow pilot set point q [kPa], the creep element Fc [N]
             s += [self._p_set, self._f_pos(self._p_set)]
+        # the set points waiting for their dead time: one queue, or one per direction
+        self._set_points = (self._q_rise, self._q_fall) if self._ext else (self._queue,)
         self._bind(s)
         self._update_substep()
 
@@ -219,7 +221,7 @@ class Rig:
         # each switch starts from the value the profile had just before it
         self._d_events = []
         for t, f in events:
-            self._sync_disturbance()
+            self._sync_disturbance()    # each start from the profile of the switches before it
             self._d_events.append((t, f, self._disturbance_at(t * 1e-9)))
         self._sync_disturbance()
 
@@ -291,15 +293,16 @@ class Rig:
         if dt_s < 0:
             raise ValueError("dt must be >= 0")
         end = self._t_ns + _ns(dt_s)
-        queues = (self._q_rise, self._q_fall) if self._ext else (self._queue,)
         while self._t_ns < end:
             t = self._t_ns
             stop = end
-            for q in queues:
+            for q in self._set_points:
                 if q and q[0][0] < stop:
                     stop = max(q[0][0], t)
             if stop > t:
-                self._advance(self._model_p, self._s, t, stop, self._h_ns, self._p_set)
+                if self._advance(self._model_p, self._s, t, stop, self._h_ns, self._p_set) != 0:
+                    raise rig_lib.RigLibError(f"libpma_rig.so refused the model ({self._n_hyst} hysteresis "
+                                              f"elements, sub-step {self._h_ns} ns)")
                 self._t_ns = stop
             if self._ext:
                 self._apply_due_ext()
@@ -407,6 +410,8 @@ class Rig:
     def _disturbance_at(self, t: float) -> float:
         """The cylinder's force [N] at time t [s]: after each switch it moves from its value
         before the switch towards the new target with load.disturbance_tau_s."""
+        if not self._d_events:      # (the recording asks every tick)
+            return 0.0
         return float(self._lib.pma_rig_disturbance_n(self._model_p, t))
 
     def _regulator_map(self, p_cmd: float) -> float:

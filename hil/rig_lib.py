@@ -14,8 +14,8 @@ from typing import Any
 REPO = Path(__file__).resolve().parents[1]
 LIB_PATH = Path(os.environ.get("PMA_RIG_LIB", REPO / "build/host-offline/hil/rig_core/libpma_rig.so"))
 BUILD_HINT = "cmake --preset host-offline && cmake --build --preset host-offline"
-API_VERSION = 1          # PMA_RIG_CORE_API_VERSION in pma_rig_core.h
-MAX_HYST = 8             # PMA_RIG_MAX_HYST
+API_VERSION = 2          # PMA_RIG_CORE_API_VERSION in pma_rig_core.h
+MAX_HYST = 8             # PMA_RIG_MAX_HYST (a mismatch changes the Model's size: _load refuses it)
 MAX_STATE = 4 + MAX_HYST + 2
 
 _d, _i32, _i64 = ctypes.c_double, ctypes.c_int32, ctypes.c_int64
@@ -74,7 +74,7 @@ def _load(path: Path) -> ctypes.CDLL:
     pm = ctypes.POINTER(Model)
     for name, res, args in (("pma_rig_core_api_version", _i32, []), ("pma_rig_model_size", _i32, []),
                             ("pma_rig_state_len", _i32, [pm]),
-                            ("pma_rig_advance", None, [pm, _pd, _i64, _i64, _i64, _d]),
+                            ("pma_rig_advance", _i32, [pm, _pd, _i64, _i64, _i64, _d]),
                             ("pma_rig_disturbance_n", _d, [pm, _d])):
         fn = getattr(lib, name)
         fn.restype, fn.argtypes = res, args

@@ -192,13 +192,13 @@ static void rk4(const pma_rig_model *m, double *s, int n, double t, double h, do
     }
 }
 
-void pma_rig_advance(const pma_rig_model *m, double *s, int64_t t_ns, int64_t stop_ns, int64_t h_ns,
-                     double p_set_kpa)
+int pma_rig_advance(const pma_rig_model *m, double *s, int64_t t_ns, int64_t stop_ns, int64_t h_ns,
+                    double p_set_kpa)
 {
-    int n = pma_rig_state_len(m);
-    if (n > PMA_RIG_MAX_STATE || m->n_hyst < 0 || h_ns <= 0) {
-        return; /* hil/rig.py validates the parameters before it gets here */
+    if (m->n_hyst < 0 || m->n_hyst > PMA_RIG_MAX_HYST || h_ns <= 0) {
+        return -1;
     }
+    int n = pma_rig_state_len(m);
     while (t_ns < stop_ns) {
         int64_t nxt = t_ns + h_ns < stop_ns ? t_ns + h_ns : stop_ns;
         for (int32_t i = 0; i < m->n_dist; i++) {
@@ -213,4 +213,5 @@ void pma_rig_advance(const pma_rig_model *m, double *s, int64_t t_ns, int64_t st
         rk4(m, s, n, (double)t_ns * 1e-9, (double)(nxt - t_ns) * 1e-9, p_set_kpa);
         t_ns = nxt;
     }
+    return 0;
 }

@@ -12,7 +12,7 @@
 
 #include <stdint.h>
 
-#define PMA_RIG_CORE_API_VERSION 1
+#define PMA_RIG_CORE_API_VERSION 2
 #define PMA_RIG_MAX_HYST 8                          /* Dahl elements of the hysteresis */
 #define PMA_RIG_MAX_STATE (4 + PMA_RIG_MAX_HYST + 2) /* xs, v, P, y, z_i..., q, Fc */
 
@@ -55,11 +55,12 @@ int pma_rig_core_api_version(void);
 int pma_rig_model_size(void);
 /* The number of state variables of a model: 4 + n_hyst (+ 2 with ext). */
 int pma_rig_state_len(const pma_rig_model *m);
-/* Advance the state s from t_ns to stop_ns (> t_ns) with the regulator set point p_set_kpa
- * held: RK4 sub-steps of h_ns from t_ns, each ended early at a disturbance switch or at the
- * temperature ramp's end. */
-void pma_rig_advance(const pma_rig_model *m, double *s, int64_t t_ns, int64_t stop_ns, int64_t h_ns,
-                     double p_set_kpa);
+/* Advance the state s from t_ns to stop_ns with the regulator set point p_set_kpa held: RK4
+ * sub-steps of h_ns from t_ns, each ended early at a disturbance switch or at the temperature
+ * ramp's end. 0, or -1 (s untouched) for a model this build cannot hold (n_hyst outside
+ * 0..PMA_RIG_MAX_HYST) or a sub-step h_ns <= 0. */
+int pma_rig_advance(const pma_rig_model *m, double *s, int64_t t_ns, int64_t stop_ns, int64_t h_ns,
+                    double p_set_kpa);
 /* The disturbance cylinder's force [N] at t_s. */
 double pma_rig_disturbance_n(const pma_rig_model *m, double t_s);
 

@@ -536,3 +536,11 @@ def test_a_missing_or_foreign_rig_library_says_how_to_build_it(tmp_path):
     (tmp_path / "bad.so").write_bytes(b"not an ELF file")
     with pytest.raises(RigLibError, match="cannot load"):
         _load(tmp_path / "bad.so")
+
+
+def test_a_model_the_c_library_cannot_hold_is_an_error_not_a_silent_standstill():
+    from hil.rig_lib import MAX_HYST, RigLibError
+    rig = Rig(quiet(), seed=1)
+    rig._model.n_hyst = MAX_HYST + 1        # what RigParams.validate refuses before it gets there
+    with pytest.raises(RigLibError, match="refused the model"):
+        rig.step(DT)

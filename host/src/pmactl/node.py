@@ -255,10 +255,10 @@ class PmaNode:
         else:
             code = int(command)
         # both are bytes in the DBC (COMMAND's Command and Arg): out of that, nothing can be sent
-        lo, hi = (int(v or 0) for v in self.proto.signal_range("COMMAND", "Arg")[:2])
-        c_lo, c_hi = (int(v or 0) for v in self.proto.signal_range("COMMAND", "Command")[:2])
-        if not (c_lo <= code <= c_hi and lo <= arg <= hi):
-            raise ValueError(f"command {command}: the command and its argument are bytes ({lo}..{hi}), got "
+        arg_lo, arg_hi = (int(v or 0) for v in self.proto.signal_range("COMMAND", "Arg")[:2])
+        code_lo, code_hi = (int(v or 0) for v in self.proto.signal_range("COMMAND", "Command")[:2])
+        if not (code_lo <= code <= code_hi and arg_lo <= arg <= arg_hi):
+            raise ValueError(f"command {command}: the command and its argument are bytes ({arg_lo}..{arg_hi}), got "
                              f"{code} and {arg}")
         self.send("COMMAND", {"Command": code, "Arg": arg})
         sig = self.wait_for("COMMAND_ACK", lambda s: s["Command"] == code and s["Arg"] == arg)
