@@ -273,3 +273,21 @@ def test_commission_checks_the_task_before_sending(pmactl, fake, args, words) ->
     time.sleep(0.05)
     assert n.sets() == [] and n.state == 1
     assert [name for name, _ in n.received if name == "COMMAND"] == []
+
+
+def test_commission_checks_its_output_directory_before_sending(pmactl, fake, tmp_path: Path) -> None:
+    """--out is checked for every file the run will write (report.json, params.json, the
+    figure) before anything is sent: a minute of measurement is not lost to it afterwards."""
+    n = fake()
+    (tmp_path / "plain").write_text("a file\n")
+    taken = tmp_path / "taken"
+    (taken / "params.json").mkdir(parents=True)               # a directory where a file goes
+    for out, words in ((tmp_path / "plain", ["not a directory"]),
+                       (tmp_path / "plain" / "sub", ["plain is not a directory"]),
+                       (taken, ["params.json", "is a directory"])):
+        r = pmactl("commission", "--w1", "0.2", "--t-u", "2", "--out", str(out), "-q")
+        _usage(r, *words)
+    assert not (tmp_path / "plain" / "sub").exists() and not (taken / "report.json").exists()
+    time.sleep(0.05)
+    assert n.sets() == [] and n.state == 1
+    assert [name for name, _ in n.received if name in ("COMMAND", "PARAM_REQ")] == []

@@ -1186,8 +1186,12 @@ def cmd_commission(s: Session) -> int:
         raise UsageError(f"--mean-speed {args.mean_speed:g} cm/s exceeds --speed {args.speed:g} cm/s "
                          "(the reference's largest speed)")
     out_dir = Path(args.out) if args.out is not None else None
-    if out_dir is not None and out_dir.exists() and not out_dir.is_dir():
-        raise UsageError(f"--out {args.out}: not a directory")
+    if out_dir is not None:
+        if out_dir.exists() and not out_dir.is_dir():
+            raise UsageError(f"--out {args.out}: not a directory")
+        # every file it will write, before anything is sent: a minute of measurement is not lost
+        # to a directory that cannot be made or written after it
+        _check_outputs([("--out", out_dir / name) for name in commission_report.FILES], create_dir=True)
     # the task, against the parameter table's ranges of the parameters it becomes (the node
     # would refuse them after the whole measurement), before anything is sent
     for option, pname, value in (("--w1", "ppc.w1_cm", args.w1), ("--t-u", "ppc.t_u_s", args.t_u),

@@ -111,14 +111,18 @@ def _noise_bound(f: dict[str, float]) -> str:
     return f" ({noise / need:.2f}x{lpf}; no --noise-limit){loud}"
 
 
+# the files write() puts into its directory (the figure only where matplotlib is installed)
+FILES = ("report.json", "params.json", "commissioning.png")
+
+
 def write(r: Result, out: Path, proto: Protocol, node: int) -> list[Path]:
     out.mkdir(parents=True, exist_ok=True)
     written = []
-    rep = out / "report.json"
+    rep = out / FILES[0]
     rep.write_text(json.dumps(_jsonable(r.report()), indent=2) + "\n")
     written.append(rep)
     values = {proto.param(name).id: value for name, value in r.derivation.params.items()}
-    par = out / "params.json"
+    par = out / FILES[1]
     par.write_text(paramfile.dumps(proto, values, node))
     written.append(par)
     written += figures(r, out)
@@ -160,7 +164,7 @@ def figures(r: Result, out: Path) -> list[Path]:
         ax[2].set_xlabel("x - mean [um]")
         ax[2].set_title(f"noise at rest: {1e4 * m.noise_cm:.1f} um (1 sigma)")
     fig.tight_layout()
-    path = out / "commissioning.png"
+    path = out / FILES[2]
     fig.savefig(path, dpi=90)
     plt.close(fig)
     return [path]
