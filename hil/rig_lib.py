@@ -8,15 +8,27 @@ from __future__ import annotations
 
 import ctypes
 import os
+import re
 from pathlib import Path
 from typing import Any
 
 REPO = Path(__file__).resolve().parents[1]
 LIB_PATH = Path(os.environ.get("PMA_RIG_LIB", REPO / "build/host-offline/hil/rig_core/libpma_rig.so"))
 BUILD_HINT = "cmake --preset host-offline && cmake --build --preset host-offline"
-API_VERSION = 2          # PMA_RIG_CORE_API_VERSION in pma_rig_core.h
-MAX_HYST = 8             # PMA_RIG_MAX_HYST (a mismatch changes the Model's size: _load refuses it)
-MAX_STATE = 4 + MAX_HYST + 2
+HEADER = REPO / "hil/rig_core/pma_rig_core.h"
+API_VERSION = 3          # the pma_rig_core.h these bindings are written for (PMA_RIG_CORE_API_VERSION)
+
+
+def _header_int(name: str) -> int:
+    """An integer #define of pma_rig_core.h: the array sizes live there alone."""
+    m = re.search(rf"^#define\s+{name}\s+(\d+)\b", HEADER.read_text(), re.MULTILINE)
+    if m is None:
+        raise ImportError(f"{HEADER}: no integer #define {name}")
+    return int(m.group(1))
+
+
+MAX_HYST = _header_int("PMA_RIG_MAX_HYST")   # hysteresis elements the Model holds
+MAX_STATE = 4 + MAX_HYST + 2                 # xs, v, P, y, z_i..., q, Fc: checked at load
 
 _d, _i32, _i64 = ctypes.c_double, ctypes.c_int32, ctypes.c_int64
 _pd, _pi64 = ctypes.POINTER(_d), ctypes.POINTER(_i64)
@@ -72,15 +84,20 @@ def open_library(path: Path, error: type[Exception]) -> ctypes.CDLL:
 def _load(path: Path) -> ctypes.CDLL:
     lib = open_library(path, RigLibError)
     pm = ctypes.POINTER(Model)
-    for name, res, args in (("pma_rig_core_api_version", _i32, []), ("pma_rig_model_size", _i32, []),
+    # the version first: a library of another version may lack the functions bound after it
+    lib.pma_rig_core_api_version.restype, lib.pma_rig_core_api_version.argtypes = _i32, []
+    version = lib.pma_rig_core_api_version()
+    if version != API_VERSION:
+        raise RigLibError(f"{path}: API version {version}, hil/rig_lib.py needs {API_VERSION}: rebuild ({BUILD_HINT})")
+    for name, res, args in (("pma_rig_model_size", _i32, []), ("pma_rig_max_state", _i32, []),
                             ("pma_rig_state_len", _i32, [pm]),
                             ("pma_rig_advance", _i32, [pm, _pd, _i64, _i64, _i64, _d]),
                             ("pma_rig_disturbance_n", _d, [pm, _d])):
         fn = getattr(lib, name)
         fn.restype, fn.argtypes = res, args
-    version = lib.pma_rig_core_api_version()
-    if version != API_VERSION:
-        raise RigLibError(f"{path}: API version {version}, hil/rig_lib.py needs {API_VERSION}: rebuild ({BUILD_HINT})")
+    if lib.pma_rig_max_state() != MAX_STATE:
+        raise RigLibError(f"{path}: a state of {lib.pma_rig_max_state()} variables, hil/rig_lib.py's {MAX_STATE}: "
+                          f"rebuild ({BUILD_HINT})")
     if lib.pma_rig_model_size() != ctypes.sizeof(Model):
         raise RigLibError(f"{path}: pma_rig_model is {lib.pma_rig_model_size()} bytes, hil/rig_lib.py's Model "
                           f"{ctypes.sizeof(Model)}: rebuild ({BUILD_HINT})")

@@ -10,6 +10,8 @@ int pma_rig_core_api_version(void) { return PMA_RIG_CORE_API_VERSION; }
 
 int pma_rig_model_size(void) { return (int)sizeof(pma_rig_model); }
 
+int pma_rig_max_state(void) { return PMA_RIG_MAX_STATE; }
+
 int pma_rig_state_len(const pma_rig_model *m) { return 4 + m->n_hyst + (m->ext ? 2 : 0); }
 
 double pma_rig_disturbance_n(const pma_rig_model *m, double t_s)

@@ -12,7 +12,7 @@
 
 #include <stdint.h>
 
-#define PMA_RIG_CORE_API_VERSION 2
+#define PMA_RIG_CORE_API_VERSION 3
 #define PMA_RIG_MAX_HYST 8                          /* Dahl elements of the hysteresis */
 #define PMA_RIG_MAX_STATE (4 + PMA_RIG_MAX_HYST + 2) /* xs, v, P, y, z_i..., q, Fc */
 
@@ -53,6 +53,8 @@ typedef struct {
 int pma_rig_core_api_version(void);
 /* sizeof(pma_rig_model): the ctypes layout is checked against it at load */
 int pma_rig_model_size(void);
+/* PMA_RIG_MAX_STATE: the state buffer's length the caller provides (checked at load) */
+int pma_rig_max_state(void);
 /* The number of state variables of a model: 4 + n_hyst (+ 2 with ext). */
 int pma_rig_state_len(const pma_rig_model *m);
 /* Advance the state s from t_ns to stop_ns with the regulator set point p_set_kpa held: RK4

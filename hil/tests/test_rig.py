@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import pathlib
+import subprocess
 import tomllib
 from typing import Any
 
@@ -530,12 +531,20 @@ def test_more_hysteresis_elements_than_the_c_model_holds_are_refused_by_name():
 
 
 def test_a_missing_or_foreign_rig_library_says_how_to_build_it(tmp_path):
-    from hil.rig_lib import BUILD_HINT, RigLibError, _load
+    from hil.rig_lib import API_VERSION, BUILD_HINT, RigLibError, _load
     with pytest.raises(RigLibError, match="not found.*" + BUILD_HINT.split()[0]):
         _load(tmp_path / "libpma_rig.so")
     (tmp_path / "bad.so").write_bytes(b"not an ELF file")
     with pytest.raises(RigLibError, match="cannot load"):
         _load(tmp_path / "bad.so")
+    # a library of another API version, which lacks this version's functions: its version named,
+    # not a missing symbol
+    src = tmp_path / "old.c"
+    src.write_text("int pma_rig_core_api_version(void) { return API_VERSION - 1; }\n"
+                   .replace("API_VERSION", str(API_VERSION)))
+    subprocess.run(["cc", "-shared", "-fPIC", "-o", str(tmp_path / "old.so"), str(src)], check=True)
+    with pytest.raises(RigLibError, match=f"API version {API_VERSION - 1}, .* needs {API_VERSION}: rebuild"):
+        _load(tmp_path / "old.so")
 
 
 def test_a_model_the_c_library_cannot_hold_is_an_error_not_a_silent_standstill():

@@ -111,9 +111,10 @@ static void test_invalid(void)
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
         TEST_ASSERT_NOT_EQUAL_INT(PMA_OK, pma_lpf_init_f32(&f, &bad[i]));
         TEST_ASSERT_NOT_EQUAL_INT(PMA_OK, pma_lpf_init_q16(&q, &bad[i]));
-        TEST_ASSERT_FALSE(f.ready);
-        /* not ready: the input passes as it is */
+        /* refused: off (k 0), the input passes as it is */
+        TEST_ASSERT_TRUE(f.k == 0.0f && q.k == 0);
         TEST_ASSERT_TRUE(pma_lpf_step_f32(&f, 3.0f) == 3.0f);
+        TEST_ASSERT_EQUAL_INT32(3 * PMA_Q16_ONE, pma_lpf_step_q16(&q, 3 * PMA_Q16_ONE));
     }
     TEST_ASSERT_EQUAL_INT(PMA_ERR_NULL, pma_lpf_init_f32(NULL, &bad[0]));
     TEST_ASSERT_EQUAL_INT(PMA_ERR_NULL, pma_lpf_init_f32(&f, NULL));

@@ -32,12 +32,10 @@ static float gain(const pma_lpf_config_t *cfg)
 int pma_lpf_init_f32(pma_lpf_f32_t *s, const pma_lpf_config_t *cfg)
 {
     if (s == NULL) return PMA_ERR_NULL;
-    s->ready = 0;
     s->k = 0.0f;   /* off until configured: a refused configuration passes samples through */
     PMA_CHECK(pma_lpf_validate_config(cfg));
     s->k = gain(cfg);
     pma_lpf_reset_f32(s);
-    s->ready = 1;
     return PMA_OK;
 }
 
@@ -51,7 +49,6 @@ void pma_lpf_reset_f32(pma_lpf_f32_t *s)
 int pma_lpf_init_q16(pma_lpf_q16_t *s, const pma_lpf_config_t *cfg)
 {
     if (s == NULL) return PMA_ERR_NULL;
-    s->ready = 0;
     s->k = 0;   /* as the float init */
     PMA_CHECK(pma_lpf_validate_config(cfg));
     const float k = gain(cfg);
@@ -62,7 +59,6 @@ int pma_lpf_init_q16(pma_lpf_q16_t *s, const pma_lpf_config_t *cfg)
         if (s->k >= PMA_Q16_ONE) s->k = 0;
     }
     pma_lpf_reset_q16(s);
-    s->ready = 1;
     return PMA_OK;
 }
 

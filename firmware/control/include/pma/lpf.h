@@ -34,7 +34,7 @@ int pma_lpf_validate_config(const pma_lpf_config_t *cfg);
 typedef struct pma_lpf_f32 {
     float k;               /* k_f in (0, 1); 0 when off or not ready (the step passes x) */
     float y;               /* the last output */
-    uint8_t ready, primed;
+    uint8_t primed;        /* 0 until the first sample (which it passes and keeps) */
 } pma_lpf_f32_t;
 
 int pma_lpf_init_f32(pma_lpf_f32_t *s, const pma_lpf_config_t *cfg);
@@ -59,7 +59,7 @@ static inline float pma_lpf_step_f32(pma_lpf_f32_t *s, float x)
 typedef struct pma_lpf_q16 {
     pma_q16_t k;           /* k_f in Q16.16, 1 ... 2^16 - 1; 0 when off or not ready */
     pma_q16_t y;           /* the last output, Q16.16 */
-    uint8_t ready, primed;
+    uint8_t primed;        /* 0 until the first sample (which it passes and keeps) */
 } pma_lpf_q16_t;
 
 int pma_lpf_init_q16(pma_lpf_q16_t *s, const pma_lpf_config_t *cfg);
