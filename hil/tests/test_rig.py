@@ -9,6 +9,7 @@ so the calibration is checked against the sources, not against itself.
 
 from __future__ import annotations
 
+import ctypes
 import math
 import pathlib
 import subprocess
@@ -531,7 +532,7 @@ def test_more_hysteresis_elements_than_the_c_model_holds_are_refused_by_name():
 
 
 def test_a_missing_or_foreign_rig_library_says_how_to_build_it(tmp_path):
-    from hil.rig_lib import API_VERSION, BUILD_HINT, RigLibError, _load
+    from hil.rig_lib import API_VERSION, BUILD_HINT, MAX_STATE, Model, RigLibError, _load
     with pytest.raises(RigLibError, match="not found.*" + BUILD_HINT.split()[0]):
         _load(tmp_path / "libpma_rig.so")
     (tmp_path / "bad.so").write_bytes(b"not an ELF file")
@@ -545,6 +546,14 @@ def test_a_missing_or_foreign_rig_library_says_how_to_build_it(tmp_path):
     subprocess.run(["cc", "-shared", "-fPIC", "-o", str(tmp_path / "old.so"), str(src)], check=True)
     with pytest.raises(RigLibError, match=f"API version {API_VERSION - 1}, .* needs {API_VERSION}: rebuild"):
         _load(tmp_path / "old.so")
+    # this version, built with a longer state than the buffer Python hands it (C would write past it)
+    src.write_text("\n".join(f"int {name}(void) {{ return {value}; }}" for name, value in (
+        ("pma_rig_core_api_version", API_VERSION), ("pma_rig_model_size", ctypes.sizeof(Model)),
+        ("pma_rig_max_state", MAX_STATE + 1))) + "\nint pma_rig_state_len(void) { return 0; }"
+                   "\nint pma_rig_advance(void) { return 0; }\ndouble pma_rig_disturbance_n(void) { return 0; }\n")
+    subprocess.run(["cc", "-shared", "-fPIC", "-o", str(tmp_path / "long.so"), str(src)], check=True)
+    with pytest.raises(RigLibError, match=f"a state of {MAX_STATE + 1} variables, .*'s {MAX_STATE}: rebuild"):
+        _load(tmp_path / "long.so")
 
 
 def test_a_model_the_c_library_cannot_hold_is_an_error_not_a_silent_standstill():
