@@ -128,8 +128,14 @@ void pma_ctrl_monitor_lost(pma_ctrl_t *s, float t_s, uint32_t law_flags)
             const int held = s->widen1_held != 0 || (sat != 0 && sat == s->widen1_sat);
             if (s->widen1_count != 0 && t_s - s->widen1_at_s < s->t_u_s && !held) hand_over = 1;
             s->widen1_at_s = t_s;
-            s->widen1_sat = s->widen1_held = sat;
+            s->widen1_sat = s->widen1_held = s->widen1_swing = sat;
             if (s->widen1_count != UINT32_MAX) ++s->widen1_count;
+        } else if (s->widen1_count != 0 && t_s - s->widen1_at_s < s->t_u_s) {
+            /* the input at both of its limits within t_u of a widening: the law swings from one
+             * limit to the other, which the widened funnel's lower gain did not calm (a loop
+             * unstable in the large); MFAC takes over now, not at the second widening */
+            s->widen1_swing |= sat;
+            if (s->widen1_swing == PMA_CTRL_SAT_FLAGS) hand_over = 1;
         }
         if (pma_ctrl_clamp_run(s)) hand_over = 1;
     }

@@ -97,6 +97,7 @@ typedef struct pma_ctrl {
     uint8_t fallback_active;/* MFAC is in charge (from the first lost tick until STOP) */
     uint8_t widen1_sat;     /* WIDEN: the law's SAT_HIGH / SAT_LOW flag at the last widening */
     uint8_t widen1_held;    /* WIDEN: that flag while every tick since has had it, else 0 */
+    uint8_t widen1_swing;   /* WIDEN: the SAT flags of the lost ticks since the last widening */
     float w1_cm, t_u_s;     /* the monitor's bound and the time it starts [cm, s] */
     uint32_t barrier_ticks; /* safety.barrier_ticks: a clamp run this long is lost (0: never) */
     uint32_t barrier_run;   /* consecutive ticks with a barrier clamp */

@@ -310,6 +310,58 @@ static void test_time_beyond_the_fixed_point_range(void)
     TEST_ASSERT_EQUAL_INT(PMA_ERR_NOT_FINITE, pma_ctrl_step(&ctl_on, 1.0f, NAN, 0.0f, &u));
 }
 
+/* The guarantee monitor's hand-over rules with ppc.fallback WIDEN (the default), driven
+ * directly with the law's flags of lost ticks: after a widening of the position funnel, the
+ * input at both of its limits within t_u (the law swinging limit to limit) hands over at once;
+ * one limit only, both limits but the second after t_u, or both without a widening, do not. */
+typedef struct lost_tick {
+    float at_t_u;    /* the tick's time after t0 = 10 s, in units of t_u */
+    uint32_t flags;  /* the law's PMA_PPC_FLAG_* of that tick */
+} lost_tick_t;
+
+/* START with the defaults (ppc.fallback as given), then the lost ticks; MFAC in charge after? */
+static int hands_over(uint32_t fallback, const lost_tick_t *ticks, size_t n)
+{
+    pma_params_defaults(&par);
+    par.ppc_fallback = fallback;
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ctrl_start(&ctl_on, &par, PERIOD_S));
+    TEST_ASSERT_TRUE(ctl_on.t_u_s > 0.0f);
+    for (size_t i = 0; i < n; ++i) {
+        TEST_ASSERT_FALSE(ctl_on.fallback_active);   /* not before the last tick */
+        pma_ctrl_monitor_lost(&ctl_on, 10.0f + ticks[i].at_t_u * ctl_on.t_u_s, ticks[i].flags);
+    }
+    TEST_ASSERT_TRUE(ctl_on.lost);
+    return ctl_on.fallback_active;
+}
+
+#define W1 PMA_PPC_FLAG_WIDEN1
+#define HI PMA_PPC_FLAG_SAT_HIGH
+#define LO PMA_PPC_FLAG_SAT_LOW
+#define HANDS_OVER(fallback, ...)                                                    \
+    hands_over((fallback), (const lost_tick_t[]){__VA_ARGS__},                       \
+               sizeof((const lost_tick_t[]){__VA_ARGS__}) / sizeof(lost_tick_t))
+
+static void test_swing_limit_to_limit_after_a_widening_hands_over(void)
+{
+    TEST_ASSERT_EQUAL_INT(PMA_PPC_FALLBACK_WIDEN, (pma_params_defaults(&par), par.ppc_fallback));
+    /* widening at the high limit, then the low limit within t_u */
+    TEST_ASSERT_TRUE(HANDS_OVER(PMA_PPC_FALLBACK_WIDEN, {0.0f, W1 | HI}, {0.1f, HI}, {0.5f, LO}));
+    /* a widening off the limits, then low, neither, high within t_u */
+    TEST_ASSERT_TRUE(HANDS_OVER(PMA_PPC_FALLBACK_WIDEN, {0.0f, W1}, {0.2f, LO}, {0.3f, 0u}, {0.9f, HI}));
+}
+
+static void test_one_limit_or_a_late_swing_keeps_the_law(void)
+{
+    /* held at one limit after the widening (a reference beyond it), then the other limit only
+     * after t_u has passed since the widening */
+    TEST_ASSERT_FALSE(HANDS_OVER(PMA_PPC_FALLBACK_WIDEN, {0.0f, W1 | LO}, {0.1f, LO}, {0.5f, LO},
+                                 {0.9f, LO}, {1.5f, HI}));
+    /* both limits on lost ticks with no widening (|e| >= w1 after t_u alone) */
+    TEST_ASSERT_FALSE(HANDS_OVER(PMA_PPC_FALLBACK_WIDEN, {0.0f, HI}, {0.1f, LO}, {0.2f, HI}));
+    /* the paper's law without widening (ppc.fallback 0) never hands over */
+    TEST_ASSERT_FALSE(HANDS_OVER(0u, {0.0f, W1 | HI}, {0.1f, LO}));
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -321,5 +373,7 @@ int main(void)
     RUN_TEST(test_ref_ff_hyst_adds_a_play_operator_on_the_reference);
     RUN_TEST(test_u_lpf_filters_the_laws_command);
     RUN_TEST(test_time_beyond_the_fixed_point_range);
+    RUN_TEST(test_swing_limit_to_limit_after_a_widening_hands_over);
+    RUN_TEST(test_one_limit_or_a_late_swing_keeps_the_law);
     return UNITY_END();
 }
