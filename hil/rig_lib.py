@@ -6,6 +6,7 @@ control tick's rig step without Python interpreter time (the HIL runner's step i
 guest)."""
 from __future__ import annotations
 
+import ast
 import ctypes
 import os
 import re
@@ -20,15 +21,31 @@ API_VERSION = 3          # the pma_rig_core.h these bindings are written for (PM
 
 
 def _header_int(name: str) -> int:
-    """An integer #define of pma_rig_core.h: the array sizes live there alone."""
-    m = re.search(rf"^#define\s+{name}\s+(\d+)\b", HEADER.read_text(), re.MULTILINE)
+    """An integer #define of pma_rig_core.h: the array sizes live there alone. Its value is an
+    integer, or a sum, difference or product of integers and other such #defines in parentheses."""
+    m = re.search(rf"^#define[ \t]+{name}[ \t]+([\w \t+*()-]*?)[ \t]*(?:/\*.*)?$", HEADER.read_text(), re.MULTILINE)
     if m is None:
         raise ImportError(f"{HEADER}: no integer #define {name}")
-    return int(m.group(1))
+
+    def value(node: ast.AST) -> int:
+        if isinstance(node, ast.Constant) and type(node.value) is int:
+            return node.value
+        if isinstance(node, ast.Name):
+            return _header_int(node.id)
+        if isinstance(node, ast.BinOp) and isinstance(node.op, (ast.Add, ast.Sub, ast.Mult)):
+            a, b = value(node.left), value(node.right)
+            return a + b if isinstance(node.op, ast.Add) else a - b if isinstance(node.op, ast.Sub) else a * b
+        raise ImportError(f"{HEADER}: #define {name} is not an integer expression: {m.group(1)!r}")
+
+    try:
+        tree = ast.parse(m.group(1).strip(), mode="eval")
+    except SyntaxError as e:
+        raise ImportError(f"{HEADER}: #define {name} is not an integer expression: {m.group(1)!r}") from e
+    return value(tree.body)
 
 
 MAX_HYST = _header_int("PMA_RIG_MAX_HYST")   # hysteresis elements the Model holds
-MAX_STATE = 4 + MAX_HYST + 2                 # xs, v, P, y, z_i..., q, Fc: checked at load
+MAX_STATE = _header_int("PMA_RIG_MAX_STATE")  # xs, v, P, y, z_i..., q, Fc: checked at load
 
 _d, _i32, _i64 = ctypes.c_double, ctypes.c_int32, ctypes.c_int64
 _pd, _pi64 = ctypes.POINTER(_d), ctypes.POINTER(_i64)

@@ -531,6 +531,21 @@ def test_more_hysteresis_elements_than_the_c_model_holds_are_refused_by_name():
         RigParams.from_dict({"muscle": {"hyst_delta_mm": [0.1] * n, "hyst_weights": [1.0 / n] * n}})
 
 
+def test_the_array_sizes_come_from_the_c_header(tmp_path, monkeypatch):
+    from hil import rig_lib
+    # the shipped header: the state length is its expression of the hysteresis elements
+    assert rig_lib.MAX_STATE == 4 + rig_lib.MAX_HYST + 2
+    assert rig_lib.library().pma_rig_max_state() == rig_lib.MAX_STATE
+    header = tmp_path / "h.h"
+    header.write_text("#define A 3\n#define B (A * 2 + 1) /* a comment */\n#define C ((B - A) * 2)\n"
+                      "#define D (A / 2)\n#define E foo(1)\n#define F\n")
+    monkeypatch.setattr(rig_lib, "HEADER", header)
+    assert [rig_lib._header_int(n) for n in "ABC"] == [3, 7, 8]
+    for name in "DEFG":   # a division, a call, no value, no such #define
+        with pytest.raises(ImportError, match=f"{name}"):
+            rig_lib._header_int(name)
+
+
 def test_a_missing_or_foreign_rig_library_says_how_to_build_it(tmp_path):
     from hil.rig_lib import API_VERSION, BUILD_HINT, MAX_STATE, Model, RigLibError, _load
     with pytest.raises(RigLibError, match="not found.*" + BUILD_HINT.split()[0]):
