@@ -55,28 +55,39 @@ class RigLibError(RuntimeError):
     """libpma_rig.so is missing or does not match this module."""
 
 
-_MODEL_FIELDS: list[tuple[str, Any]] = [(name, _d) for name in (
-    "f0_n", "f1_n_per_kpa", "f_clip_width_sq_n2", "k_break_kpa", "k_blend_kpa",
-    "k0_low_n_per_mm", "k1_low_n_per_mm_kpa", "k0_high_n_per_mm", "k1_high_n_per_mm_kpa",
-    "b_mid_ns_per_mm", "b_half_ns_per_mm", "b_blend_mm_s", "hyst_force_n", "hyst_ramp_n")] + [
-    ("hyst_delta_mm", _d * MAX_HYST), ("hyst_w_per_delta_per_mm", _d * MAX_HYST)] + [
-    (name, _d) for name in (
-        "drift_rate_k_per_s", "drift_max_rise_k", "drift_f_per_k", "drift_k_per_k", "drift_b_per_k",
-        "tau_p_s", "tau_y_s", "w_static_n", "acc_mm_s2_per_n", "dist_tau_s")] + [
-    ("dist_t_ns", _pi64), ("dist_target_n", _pd), ("dist_start_n", _pd), ("drift_knee_ns", _i64),
-    ("n_hyst", _i32), ("n_dist", _i32), ("ext", _i32), ("flow", _i32)] + [
-    (name, _d) for name in (
-        "creep_frac_contract", "creep_frac_relax", "creep_inv_tau_contract_per_s",
-        "creep_inv_tau_relax_per_s", "creep_blend_sq_n2",
-        "slow_weight_rise", "slow_weight_fall", "slow_inv_tau_rise_per_s", "slow_inv_tau_fall_per_s",
-        "valve_band_kpa", "valve_fill_rate_kpa_s", "valve_exhaust_rate_kpa_s", "valve_supply_abs_kpa",
-        "valve_atm_kpa", "valve_b_critical", "valve_volume_gain_per_mm", "valve_polytropic_n")]
+_C_TYPES: dict[str, Any] = {"double": _d, "int32_t": _i32, "int64_t": _i64,
+                            "const double *": _pd, "const int64_t *": _pi64}
+
+
+def _struct_fields(name: str) -> list[tuple[str, Any]]:
+    """The ctypes fields of `typedef struct { ... } name;` in pma_rig_core.h, in its order: the
+    header is the layout's one source (declarations of the types in _C_TYPES, several names to a
+    declaration, arrays sized by an integer #define)."""
+    text = re.sub(r"/\*.*?\*/", " ", HEADER.read_text(), flags=re.DOTALL)
+    m = re.search(rf"typedef\s+struct\s*\{{([^{{}}]*)\}}\s*{name}\s*;", text)
+    if m is None:
+        raise ImportError(f"{HEADER}: no typedef struct {name}")
+    fields: list[tuple[str, Any]] = []
+    for decl in filter(None, (d.strip() for d in m.group(1).split(";"))):
+        d = re.fullmatch(r"((?:const\s+)?\w+)\s*(\*?)\s*(.+)", decl, re.DOTALL)
+        ctype = None if d is None else _C_TYPES.get(d.group(1) + (" *" if d.group(2) else ""))
+        if d is None or ctype is None:
+            raise ImportError(f"{HEADER}: {name}: a declaration of a type rig_lib.py does not map: {decl!r}")
+        for item in (i.strip() for i in d.group(3).split(",")):
+            a = re.fullmatch(r"(\w+)(?:\s*\[\s*(\w+)\s*\])?", item)
+            if a is None:
+                raise ImportError(f"{HEADER}: {name}: cannot read the field {item!r}")
+            n = a.group(2)
+            size = None if n is None else int(n) if n.isdigit() else _header_int(n)
+            fields.append((a.group(1), ctype if size is None else ctype * size))
+    return fields
 
 
 class Model(ctypes.Structure):
-    """pma_rig_model (pma_rig_core.h): units in the field names' comments there."""
+    """pma_rig_model (pma_rig_core.h, read from there: _struct_fields; its size checked against
+    the library's at load): units in the field names' comments there."""
 
-    _fields_ = _MODEL_FIELDS
+    _fields_ = _struct_fields("pma_rig_model")
 
 
 State = _d * MAX_STATE

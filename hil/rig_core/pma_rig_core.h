@@ -16,7 +16,9 @@
 #define PMA_RIG_MAX_HYST 8                          /* Dahl elements of the hysteresis */
 #define PMA_RIG_MAX_STATE (4 + PMA_RIG_MAX_HYST + 2) /* xs, v, P, y, z_i..., q, Fc */
 
-/* The constants of the right-hand side (hil/rig.py Rig._cache fills them). */
+/* The constants of the right-hand side (hil/rig.py Rig._cache fills them). hil/rig_lib.py reads
+ * this struct's fields from here (its ctypes layout): declare them as double, int32_t, int64_t,
+ * const double * or const int64_t *, arrays sized by a number or an integer #define. */
 typedef struct {
     double f0_n, f1_n_per_kpa, f_clip_width_sq_n2; /* contractile element F(P), smooth clip */
     double k_break_kpa, k_blend_kpa;                /* spring K(P): branch blend */

@@ -546,6 +546,24 @@ def test_the_array_sizes_come_from_the_c_header(tmp_path, monkeypatch):
             rig_lib._header_int(name)
 
 
+def test_the_model_layout_comes_from_the_c_header(tmp_path, monkeypatch):
+    from hil import rig_lib
+    header = tmp_path / "h.h"
+    monkeypatch.setattr(rig_lib, "HEADER", header)
+    header.write_text("#define N (2 + 1)\ntypedef struct {\n    double a, b[N]; /* two; b: three */\n"
+                      "    const int64_t *t; /* c */ int32_t n;\n    const double *p;\n    int64_t k[4];\n} m_t;\n")
+    assert [(name, t) for name, t in rig_lib._struct_fields("m_t")] == [
+        ("a", ctypes.c_double), ("b", ctypes.c_double * 3), ("t", ctypes.POINTER(ctypes.c_int64)),
+        ("n", ctypes.c_int32), ("p", ctypes.POINTER(ctypes.c_double)), ("k", ctypes.c_int64 * 4)]
+    for text, match in (("typedef struct { float f; } m_t;", "does not map"),
+                        ("typedef struct { double f[M]; } m_t;", "no integer #define M"),
+                        ("typedef struct { double f g; } m_t;", "cannot read the field"),
+                        ("typedef struct { double f; } other_t;", "no typedef struct m_t")):
+        header.write_text(text + "\n")
+        with pytest.raises(ImportError, match=match):
+            rig_lib._struct_fields("m_t")
+
+
 def test_a_missing_or_foreign_rig_library_says_how_to_build_it(tmp_path):
     from hil.rig_lib import API_VERSION, BUILD_HINT, MAX_STATE, Model, RigLibError, _load
     with pytest.raises(RigLibError, match="not found.*" + BUILD_HINT.split()[0]):
