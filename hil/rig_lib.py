@@ -8,10 +8,11 @@ from __future__ import annotations
 
 import ast
 import ctypes
+import operator
 import os
 import re
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 REPO = Path(__file__).resolve().parents[1]
 LIB_PATH = Path(os.environ.get("PMA_RIG_LIB", REPO / "build/host-offline/hil/rig_core/libpma_rig.so"))
@@ -20,27 +21,31 @@ HEADER = REPO / "hil/rig_core/pma_rig_core.h"
 API_VERSION = 3          # the pma_rig_core.h these bindings are written for (PMA_RIG_CORE_API_VERSION)
 
 
+_INT_OPS: dict[type[ast.operator], Callable[[int, int], int]] = {
+    ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul}
+
+
 def _header_int(name: str) -> int:
     """An integer #define of pma_rig_core.h: the array sizes live there alone. Its value is an
     integer, or a sum, difference or product of integers and other such #defines in parentheses."""
     m = re.search(rf"^#define[ \t]+{name}[ \t]+([\w \t+*()-]*?)[ \t]*(?:/\*.*)?$", HEADER.read_text(), re.MULTILINE)
     if m is None:
         raise ImportError(f"{HEADER}: no integer #define {name}")
+    not_int = f"{HEADER}: #define {name} is not an integer expression: {m.group(1)!r}"
 
     def value(node: ast.AST) -> int:
         if isinstance(node, ast.Constant) and type(node.value) is int:
             return node.value
         if isinstance(node, ast.Name):
             return _header_int(node.id)
-        if isinstance(node, ast.BinOp) and isinstance(node.op, (ast.Add, ast.Sub, ast.Mult)):
-            a, b = value(node.left), value(node.right)
-            return a + b if isinstance(node.op, ast.Add) else a - b if isinstance(node.op, ast.Sub) else a * b
-        raise ImportError(f"{HEADER}: #define {name} is not an integer expression: {m.group(1)!r}")
+        if isinstance(node, ast.BinOp) and type(node.op) in _INT_OPS:
+            return _INT_OPS[type(node.op)](value(node.left), value(node.right))
+        raise ImportError(not_int)
 
     try:
         tree = ast.parse(m.group(1).strip(), mode="eval")
     except SyntaxError as e:
-        raise ImportError(f"{HEADER}: #define {name} is not an integer expression: {m.group(1)!r}") from e
+        raise ImportError(not_int) from e
     return value(tree.body)
 
 

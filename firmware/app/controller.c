@@ -124,13 +124,14 @@ void pma_ctrl_monitor_lost(pma_ctrl_t *s, float t_s, uint32_t law_flags)
          * every tick since): the reference lies beyond what that limit gives (out of the
          * stroke, a load the pressure cannot hold), MFAC would be held there too, and the law
          * tracks the rest better */
+        const int within_t_u = s->widen1_count != 0 && t_s - s->widen1_at_s < s->t_u_s;
         if (law_flags & PMA_PPC_FLAG_WIDEN1) {
             const int held = s->widen1_held != 0 || (sat != 0 && sat == s->widen1_sat);
-            if (s->widen1_count != 0 && t_s - s->widen1_at_s < s->t_u_s && !held) hand_over = 1;
+            if (within_t_u && !held) hand_over = 1;
             s->widen1_at_s = t_s;
             s->widen1_sat = s->widen1_held = s->widen1_swing = sat;
             if (s->widen1_count != UINT32_MAX) ++s->widen1_count;
-        } else if (s->widen1_count != 0 && t_s - s->widen1_at_s < s->t_u_s) {
+        } else if (within_t_u) {
             /* the input at both of its limits within t_u of a widening: the law swings from one
              * limit to the other, which the widened funnel's lower gain did not calm (a loop
              * unstable in the large); MFAC takes over now, not at the second widening */

@@ -314,8 +314,9 @@ static void test_time_beyond_the_fixed_point_range(void)
  * directly with the law's flags of lost ticks: after a widening of the position funnel, the
  * input at both of its limits within t_u (the law swinging limit to limit) hands over at once;
  * one limit only, both limits but the second after t_u, or both without a widening, do not. */
+#define T0_S 10.0f   /* the first lost tick's control time [s] */
 typedef struct lost_tick {
-    float at_t_u;    /* the tick's time after t0 = 10 s, in units of t_u */
+    float at_t_u;    /* the tick's time after T0_S, in units of t_u */
     uint32_t flags;  /* the law's PMA_PPC_FLAG_* of that tick */
 } lost_tick_t;
 
@@ -328,7 +329,7 @@ static int hands_over(uint32_t fallback, const lost_tick_t *ticks, size_t n)
     TEST_ASSERT_TRUE(ctl_on.t_u_s > 0.0f);
     for (size_t i = 0; i < n; ++i) {
         TEST_ASSERT_FALSE(ctl_on.fallback_active);   /* not before the last tick */
-        pma_ctrl_monitor_lost(&ctl_on, 10.0f + ticks[i].at_t_u * ctl_on.t_u_s, ticks[i].flags);
+        pma_ctrl_monitor_lost(&ctl_on, T0_S + ticks[i].at_t_u * ctl_on.t_u_s, ticks[i].flags);
     }
     TEST_ASSERT_TRUE(ctl_on.lost);
     return ctl_on.fallback_active;
@@ -343,7 +344,8 @@ static int hands_over(uint32_t fallback, const lost_tick_t *ticks, size_t n)
 
 static void test_swing_limit_to_limit_after_a_widening_hands_over(void)
 {
-    TEST_ASSERT_EQUAL_INT(PMA_PPC_FALLBACK_WIDEN, (pma_params_defaults(&par), par.ppc_fallback));
+    pma_params_defaults(&par);
+    TEST_ASSERT_EQUAL_INT(PMA_PPC_FALLBACK_WIDEN, par.ppc_fallback);   /* the default */
     /* widening at the high limit, then the low limit within t_u */
     TEST_ASSERT_TRUE(HANDS_OVER(PMA_PPC_FALLBACK_WIDEN, {0.0f, W1 | HI}, {0.1f, HI}, {0.5f, LO}));
     /* a widening off the limits, then low, neither, high within t_u */
