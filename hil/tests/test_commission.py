@@ -209,6 +209,32 @@ def test_derive_follows_the_rules():
     assert len(d.warnings) == 1 and "measured stroke" in d.warnings[0]
 
 
+def test_the_start_is_held_on_the_path_from_the_armed_muscle():
+    # ARM raises the pressure to p0 = the middle of the branches at the band's middle (-1.3 cm:
+    # 350 kPa), so the armed muscle rests on the rising branch there, at -1.15 cm
+    up = _map()
+    d = derive(_measured(), TASK)
+    p0 = d.params["act.p0_kpa"]
+    assert p0 == pytest.approx(350.0)
+    assert d.figures["x_armed_cm"] == pytest.approx(-1.15)
+    # x falls as the pressure rises (polarity -1): a start at -2 cm lies further along the rising
+    # branch, reached by raising the pressure still: held at the rising branch's 700 kPa, not at the
+    # middle of the branches (625 kPa); u = polarity (p - p0)
+    assert d.figures["p_start_kpa"] == pytest.approx(700.0) and d.figures["start_on_rising_branch"] == 1.0
+    assert up.hold_kpa(-2.0) == pytest.approx(625.0)
+    assert d.params["ppc.ff_init"] == pytest.approx(-(700.0 - p0))
+    assert d.params["mfac.u_init"] == d.params["ppc.ff_init"]
+    # a start back from the armed muscle (-0.5 cm) is reached by lowering the pressure, onto a minor
+    # loop between the branches: the middle of the branches (175 and 140 kPa)
+    back = derive(_measured(), Task(w1_cm=0.2, t_u_s=2.0, x_min_cm=-3.0, x_max_cm=0.0, x_start_cm=-0.5))
+    assert back.figures["p_start_kpa"] == pytest.approx(0.5 * (175.0 + 140.0))
+    assert back.figures["start_on_rising_branch"] == 0.0
+    assert back.params["ppc.ff_init"] == pytest.approx(-(157.5 - p0))
+    # the armed position itself: no way to go, the middle
+    here = derive(_measured(), Task(w1_cm=0.2, t_u_s=2.0, x_min_cm=-3.0, x_max_cm=0.0, x_start_cm=-1.15))
+    assert here.figures["p_start_kpa"] == pytest.approx(up.hold_kpa(-1.15))
+
+
 def test_derive_gains_fall_with_the_dead_time():
     fast, slow = derive(_measured(theta=0.005), TASK), derive(_measured(theta=0.04), TASK)
     assert slow.params["ppc.a_cm_s"] <= fast.params["ppc.a_cm_s"]   # K_p = 1 / tau_I: the lag's, or slower

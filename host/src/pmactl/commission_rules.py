@@ -680,7 +680,19 @@ def derive(m: Measured, task: Task) -> Derivation:
     w2 = W2_PER_A * a
     c = 2.0 * w2 * w2 * k_v / math.pi
     u_lo, u_hi = sorted((u_of(m.p_min_kpa), u_of(m.p_max_kpa)))
-    u_start = u_of(m.static_map.hold_kpa(x_start))
+    # the start's holding input, on the path the muscle takes there. ARM raises the pressure from
+    # vented to p0, so the armed muscle rests on the rising branch (x_armed); a start further along
+    # that branch (dx/dp has the sign of the polarity) is reached by raising the pressure still, and
+    # held by the rising branch's pressure. The middle of the branches there is a pressure below
+    # the path: the muscle drifts the wrong way while the tuning function still holds the law's
+    # gain low, and on a slow valve the law met its barrier, swung from limit to limit and handed
+    # over to MFAC (docs/commissioning.md, "The rules"). A start back from x_armed reverses onto a
+    # minor loop between the branches, whose middle stays the best guess
+    x_armed = _interp_x(m.static_map.p_up_kpa, m.static_map.x_up_cm, p0)
+    start_on_rise = (x_start - x_armed) * polarity > 0
+    p_start = (_interp_p(m.static_map.p_up_kpa, m.static_map.x_up_cm, x_start) if start_on_rise
+               else m.static_map.hold_kpa(x_start))
+    u_start = u_of(p_start)
     # MFAC's first steps at the integral gain of the tightest loop: the noise limit and the command's
     # low-pass are the paper's law's, and MFAC has neither
     mfac_ki = unfiltered[0].ki
@@ -717,7 +729,6 @@ def derive(m: Measured, task: Task) -> Derivation:
     # the large-signal side of t_u: ARM raises the pressure from vented to act.p0_kpa, so the armed
     # muscle rests on the static map's rising branch at p0; the funnel then asks the loop to cover
     # the distance to the reference's start within t_u, and it follows about v_max
-    x_armed = _interp_x(m.static_map.p_up_kpa, m.static_map.x_up_cm, p0)
     e0 = math.nan if task.x_start_cm is None else abs(task.x_start_cm - x_armed)
     t_u_travel = e0 / v_max if v_max > 0 else math.inf
     if task.x_start_cm is not None and task.t_u_s < t_u_travel:
@@ -765,7 +776,8 @@ def derive(m: Measured, task: Task) -> Derivation:
                "hysteresis_kpa_over_ref": hyst_kpa,
                "kc_u_per_cm": kc, "tau_i_s": tau_i, "k_p_per_s": k_p, "k_v_u_per_cm_s": k_v, "w1_min_cm": w1_min,
                "v_max_cm_s": v_max, "t_u_min_s": t_u_min,
-               "x_armed_cm": x_armed, "t_u_travel_s": t_u_travel if math.isfinite(t_u_travel) else 0.0,
+               "x_armed_cm": x_armed, "p_start_kpa": p_start, "start_on_rising_branch": float(start_on_rise),
+               "t_u_travel_s": t_u_travel if math.isfinite(t_u_travel) else 0.0,
                "with_observer_phase_margin_deg": with_observer["phase_margin_deg"],
                "with_observer_gain_margin": with_observer["gain_margin"],
                "with_observer_delay_margin_s": with_observer["delay_margin_s"],
