@@ -135,6 +135,7 @@ class Rig:
             self._seq_sent = 0
             self._seq_applied = 0
             self._last_sent = self._p_set
+            self._last_rising = True
             # extra state: the valve's slow pilot set point q [kPa], the creep element Fc [N]
             s += [self._p_set, self._f_pos(self._p_set)]
         # the set points waiting for their dead time: one queue, or one per direction
@@ -350,9 +351,14 @@ class Rig:
     # ------------------------------------------------- the extended model
     def _enqueue_ext(self, p_set: float) -> None:
         """A new regulator set point, delayed by the dead time of its direction
-        (rising or falling against the previous command). A set point that takes
-        effect replaces every older one still waiting (a later command wins)."""
-        rising = p_set >= self._last_sent
+        (rising or falling against the previous command; a command equal to the one
+        before keeps the direction of the last change: a held set point is no new
+        rising one, which would overtake a falling step still in its longer dead
+        time). A set point that takes effect replaces every older one still waiting
+        (a later command wins)."""
+        if p_set != self._last_sent:
+            self._last_rising = p_set > self._last_sent
+        rising = self._last_rising
         self._last_sent = p_set
         self._seq_sent += 1
         dead = self._dead_rise_ns if rising else self._dead_fall_ns

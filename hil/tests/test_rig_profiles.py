@@ -19,7 +19,7 @@ import pytest
 from hil import scenario as scn
 from hil.rig import Rig
 from hil.rig_figures import DMSP10_POINTS, MAS10_POINTS, quiet, run_commands, step_figures, table
-from hil.rig_params import RigParams
+from hil.rig_params import RigParams, ValveParams
 from hil.rig_profiles import PROFILES, dmsp10_fit_report
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
@@ -121,13 +121,18 @@ def test_nominal_profile_still_shows_the_idealised_column():
     assert f["creep_pct"] < 3.0
 
 
-def test_dead_time_differs_by_direction_and_a_later_command_wins():
+def _dmsp10_at_rest_at_200_kpa() -> tuple[Rig, ValveParams]:
+    """A quiet dmsp10 rig held at 200 kPa for 3 s (1 ms ticks), and its valve's parameters."""
     p = quiet(RigParams.from_dict({"profile": "dmsp10"}), substep_s=1e-4)
-    v = p.valve
     rig = Rig(RigParams.from_dict({**p.to_dict(), "initial_p_kpa": 200.0}))
     for _ in range(3000):
         rig.apply_pressure_kpa(200.0)
         rig.step(0.001)
+    return rig, p.valve
+
+
+def test_dead_time_differs_by_direction_and_a_later_command_wins():
+    rig, v = _dmsp10_at_rest_at_200_kpa()
     p_rest = rig.p_kpa
     # a fall, then at once a rise back: the rise (shorter dead time) takes effect first
     rig.apply_pressure_kpa(100.0)
@@ -141,6 +146,21 @@ def test_dead_time_differs_by_direction_and_a_later_command_wins():
             t_rise = (k + 2) * 1e-3
     assert t_rise == pytest.approx(v.dead_time_rise_s, abs=2.5e-3)
     assert rig.p_set_kpa > 240.0 and rig.p_kpa > p_rest  # the older fall never took effect
+
+
+def test_a_held_falling_command_keeps_its_dead_time():
+    # a step down held by the same command every tick (as the firmware sends it): the later,
+    # equal commands keep the fall's direction and do not overtake it with the rise's shorter
+    # dead time
+    rig, v = _dmsp10_at_rest_at_200_kpa()
+    assert v.dead_time_fall_s > v.dead_time_rise_s + 0.01
+    t_fall = None
+    for k in range(int(1000 * (v.dead_time_fall_s + 0.05))):
+        rig.apply_pressure_kpa(100.0)
+        rig.step(0.001)
+        if t_fall is None and rig.p_set_kpa < 110.0:
+            t_fall = (k + 1) * 1e-3
+    assert t_fall == pytest.approx(v.dead_time_fall_s, abs=2.5e-3)
 
 
 def test_extended_model_keeps_the_static_model_and_is_deterministic():
