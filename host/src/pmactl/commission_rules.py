@@ -141,15 +141,27 @@ class StaticMap:
         xs = self.all_x()
         return min(xs), max(xs)
 
-    def hold_kpa(self, x_cm: float) -> float:
-        """The pressure that holds x: the middle of the two branches (linear between points;
-        at a branch's end, its end). CommissionError outside the stroke."""
+    def rising_kpa(self, x_cm: float) -> float:
+        """The pressure at x on the rising branch (linear between points; at the branch's end,
+        its end). CommissionError outside the stroke."""
         self._check(x_cm)
-        return 0.5 * (_interp_p(self.p_up_kpa, self.x_up_cm, x_cm) + _interp_p(self.p_down_kpa, self.x_down_cm, x_cm))
+        return _interp_p(self.p_up_kpa, self.x_up_cm, x_cm)
+
+    def falling_kpa(self, x_cm: float) -> float:
+        """The pressure at x on the falling branch (as rising_kpa)."""
+        self._check(x_cm)
+        return _interp_p(self.p_down_kpa, self.x_down_cm, x_cm)
+
+    def rising_x_cm(self, p_kpa: float) -> float:
+        """x at p on the rising branch, where a muscle raised to p from below rests."""
+        return _interp_x(self.p_up_kpa, self.x_up_cm, p_kpa)
+
+    def hold_kpa(self, x_cm: float) -> float:
+        """The pressure that holds x: the middle of the two branches."""
+        return 0.5 * (self.rising_kpa(x_cm) + self.falling_kpa(x_cm))
 
     def hysteresis_kpa(self, x_cm: float) -> float:
-        self._check(x_cm)
-        return abs(_interp_p(self.p_up_kpa, self.x_up_cm, x_cm) - _interp_p(self.p_down_kpa, self.x_down_cm, x_cm))
+        return abs(self.rising_kpa(x_cm) - self.falling_kpa(x_cm))
 
     def _check(self, x_cm: float) -> None:
         lo, hi = self.stroke_cm()
@@ -688,10 +700,9 @@ def derive(m: Measured, task: Task) -> Derivation:
     # gain low, and on a slow valve the law met its barrier, swung from limit to limit and handed
     # over to MFAC (docs/commissioning.md, "The rules"). A start back from x_armed reverses onto a
     # minor loop between the branches, whose middle stays the best guess
-    x_armed = _interp_x(m.static_map.p_up_kpa, m.static_map.x_up_cm, p0)
+    x_armed = m.static_map.rising_x_cm(p0)
     start_on_rise = (x_start - x_armed) * polarity > 0
-    p_start = (_interp_p(m.static_map.p_up_kpa, m.static_map.x_up_cm, x_start) if start_on_rise
-               else m.static_map.hold_kpa(x_start))
+    p_start = m.static_map.rising_kpa(x_start) if start_on_rise else m.static_map.hold_kpa(x_start)
     u_start = u_of(p_start)
     # MFAC's first steps at the integral gain of the tightest loop: the noise limit and the command's
     # low-pass are the paper's law's, and MFAC has neither
@@ -726,9 +737,8 @@ def derive(m: Measured, task: Task) -> Derivation:
     if task.t_u_s < t_u_min:
         warnings.append(f"t_u = {task.t_u_s:g} s is shorter than 4 (tau_c + theta) = {t_u_min:.3f} s: the error may "
                         "not have entered the band by then")
-    # the large-signal side of t_u: ARM raises the pressure from vented to act.p0_kpa, so the armed
-    # muscle rests on the static map's rising branch at p0; the funnel then asks the loop to cover
-    # the distance to the reference's start within t_u, and it follows about v_max
+    # the large-signal side of t_u: the funnel asks the loop to cover the distance from the armed
+    # muscle (x_armed, above) to the reference's start within t_u, and it follows about v_max
     e0 = math.nan if task.x_start_cm is None else abs(task.x_start_cm - x_armed)
     t_u_travel = e0 / v_max if v_max > 0 else math.inf
     if task.x_start_cm is not None and task.t_u_s < t_u_travel:
