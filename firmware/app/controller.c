@@ -49,8 +49,15 @@ int pma_ctrl_start(pma_ctrl_t *s, const pma_params_t *p, float period_s)
         if (!pma_isfinite_f32(s->ref_ff_u_per_cm) || !(s->ref_ff_lead_s >= 0.0f)) return PMA_ERR_RANGE;
         if (!(p->ppc_ref_ff_hyst >= 0.0f && p->ppc_ref_ff_hyst_cm > 0.0f)) return PMA_ERR_RANGE;
         s->hyst_cm = p->ppc_ref_ff_hyst_cm;
-        s->hyst_u_per_cm = p->ppc_ref_ff_hyst / p->ppc_ref_ff_hyst_cm;
-        if (!pma_isfinite_f32(s->hyst_u_per_cm)) return PMA_ERR_RANGE;
+        s->hyst_u = p->ppc_ref_ff_hyst;
+        s->hyst_k = p->ppc_ref_ff_hyst_gain_per_s * period_s;
+        s->hyst_max_u = p->ppc_ref_ff_hyst_max;
+        /* the adaptation starts inside its bound, at a per-step gain below 1 */
+        if (!(s->hyst_k >= 0.0f && s->hyst_k < 1.0f)) return PMA_ERR_RANGE;
+        if (s->hyst_k > 0.0f && (!(s->hyst_u <= s->hyst_max_u) || !(p->ppc_ff_gain_per_s > 0.0f))) {
+            return PMA_ERR_RANGE;   /* it learns from, and hands over to, the feedforward integrator */
+        }
+        s->hyst_on = (uint8_t)(s->hyst_u > 0.0f || s->hyst_k > 0.0f);
         if (s->ppc_obs_pos && su.vel.kind != PMA_VELEST_TRACKING) return PMA_ERR_RANGE;
         pma_ppc_config_t *c = &su.ppc;
         pma_ppc_default_config(c);

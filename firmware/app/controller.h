@@ -67,7 +67,10 @@ typedef struct pma_ctrl {
     pma_mfac_q16_t shadow;  /* MFAC, in charge from the hand-over (ppc.fallback), as below */
     pma_q16_t q_period_s, q_w1_cm, q_t_u_s;
     pma_q16_t q_ref_ff_u_per_cm, q_ref_ff_lead_s, q_xr0_cm;
-    pma_q16_t q_hyst_u_per_cm, q_hyst_cm, q_play_z_cm;   /* ref_ff_hyst / ref_ff_hyst_cm, the play */
+    pma_q16_t q_hyst_cm, q_hyst_inv_cm, q_play_z_cm;     /* ref_ff_hyst_cm (0: the term is off), its inverse, the play */
+    pma_q16_t q_hyst_u, q_hyst_max_u;                    /* the height H and its bound [input unit] */
+    int64_t q_hyst_u_q32;                                /* H with 32 fractional bits (adapted) */
+    pma_q30_t q_hyst_k;                                  /* gain * period (Q2.30) */
     pma_ctrl_out_q16_t q_out;
 #else
     pma_ref_f32_t ref;
@@ -85,11 +88,13 @@ typedef struct pma_ctrl {
     uint8_t ppc_ref_vel;    /* option ppc.ref_vel: the law damps x' - x_r' */
     uint8_t ppc_obs_pos;    /* option ppc.obs_pos: the law's x is the observer's x_hat */
     uint8_t xr0_set;        /* xr0_cm holds the reference at START */
+    uint8_t hyst_on;        /* the hysteresis term is on (ppc.ref_ff_hyst or its adaptation) */
     float ref_ff_u_per_cm;  /* option ppc.ref_ff: the static map's slope [input unit/cm] (0: off) */
     float ref_ff_lead_s;    /* ppc.ref_ff_lead_s: how far ahead the feedforward takes x_r [s] */
-    float hyst_u_per_cm;    /* option ppc.ref_ff_hyst over ppc.ref_ff_hyst_cm: the hysteresis term's
-                             * height over the play's half-width [input unit/cm] (0: off) */
+    float hyst_u;           /* its height H [input unit]: ppc.ref_ff_hyst at START; float: adapted */
     float hyst_cm;          /* ppc.ref_ff_hyst_cm: the play operator's half-width [cm] */
+    float hyst_k;           /* ppc.ref_ff_hyst_gain_per_s * period: H's adaptation per step (0: fixed) */
+    float hyst_max_u;       /* ppc.ref_ff_hyst_max: H's bound while it adapts [input unit] */
     float xr0_cm;           /* the reference at START [cm] */
     uint32_t breaches;      /* steps with a barrier clamp since START */
     uint8_t fallback_mode;  /* ppc.fallback: PMA_PPC_FALLBACK_NONE, _MFAC, _WIDEN */

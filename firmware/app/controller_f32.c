@@ -31,6 +31,24 @@ static float clampf(float v, float lo, float hi)
     return v < lo ? lo : (v > hi ? hi : v);
 }
 
+/* ppc.ref_ff_hyst_gain_per_s: the hysteresis term's height learns the part of the law's output
+ * that follows the branch, where the feedforward integrator would (not while the reference
+ * stands still, nor where the integrator's anti-windup holds it, nor once the guarantee was
+ * lost: a task beyond the rig says nothing about the muscle's hysteresis), and the integrator gives up
+ * what the term takes: u_ff + H s stays on the integrator's path, so between reversals the loop
+ * is the one without adaptation, and at a reversal H s moves by the step that the law needed. */
+static void adapt_hysteresis(pma_ctrl_t *s, float branch, float xr_dot_cm_s)
+{
+    const pma_ppc_out_f32_t *po = &s->c.ppc.out;
+    if (s->lost || xr_dot_cm_s == 0.0f || ((po->flags & PMA_PPC_FLAG_SAT_HIGH) && po->u_law > 0.0f) ||
+        ((po->flags & PMA_PPC_FLAG_SAT_LOW) && po->u_law < 0.0f)) {
+        return;
+    }
+    const float h = clampf(s->hyst_u + s->hyst_k * po->u_law * branch, 0.0f, s->hyst_max_u);
+    pma_ppc_ff_move_f32(&s->c.ppc, -(h - s->hyst_u) * branch);
+    s->hyst_u = h;
+}
+
 int pma_ctrl_init_arith(pma_ctrl_t *s, const pma_ctrl_setup_t *su)
 {
     CHECK(pma_ref_init_f32(&s->ref, &s->ref_cfg));
@@ -78,7 +96,8 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
             /* the options (controller.h) choose the law's inputs */
             const float x_law_cm = s->ppc_obs_pos ? s->vel.xh : x_cm;
             const float v_law_cm_s = s->ppc_ref_vel ? o->v_cm_s - o->xr_dot_cm_s : o->v_cm_s;
-            if (s->ref_ff_u_per_cm != 0.0f || s->hyst_u_per_cm != 0.0f) {
+            float branch = 0.0f;   /* the hysteresis term's branch s = (x_a - z) / b, -1..1 */
+            if (s->ref_ff_u_per_cm != 0.0f || s->hyst_on) {
                 const float lead_cm = s->ref_ff_lead_s * o->xr_dot_cm_s;
                 const float xa_cm = o->xr_cm + lead_cm;   /* x_a: the reference taken lead ahead */
                 if (!s->xr0_set) {
@@ -88,13 +107,15 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
                 }
                 const float ahead_cm = (o->xr_cm - s->xr0_cm) + lead_cm;
                 u_ref = s->ref_ff_u_per_cm * ahead_cm;
-                if (s->hyst_u_per_cm != 0.0f) {
+                if (s->hyst_on) {
                     /* the play operator: z follows x_a at hyst_cm */
                     s->play_z_cm = clampf(s->play_z_cm, xa_cm - s->hyst_cm, xa_cm + s->hyst_cm);
-                    u_ref += s->hyst_u_per_cm * (xa_cm - s->play_z_cm);
+                    branch = (xa_cm - s->play_z_cm) / s->hyst_cm;
+                    u_ref += s->hyst_u * branch;
                 }
             }
             CHECK(pma_ppc_step_ext_f32(&s->c.ppc, t_s, x_law_cm, v_law_cm_s, o->xr_cm, u_ref, &out));
+            if (s->hyst_k > 0.0f) adapt_hysteresis(s, branch, o->xr_dot_cm_s);
             out = pma_lpf_step_f32(&s->u_lpf, out);   /* option ppc.u_lpf_hz (off: out itself) */
             o->flags = s->c.ppc.out.flags;
             o->internal1 = s->c.ppc.out.lambda1_cm;

@@ -46,6 +46,25 @@ static pma_q16_t q16_abs(pma_q16_t a)
     return a < 0 ? pma_q16_sneg(a) : a;
 }
 
+/* As controller_f32.c's: H in Q32 (its increments are far below Q16.16's resolution), the
+ * integrator moved by the change of the rounded H s that u_ref carries. */
+static void adapt_hysteresis(pma_ctrl_t *s, pma_q16_t branch, pma_q16_t xr_dot_cm_s)
+{
+    const pma_ppc_out_q16_t *po = &s->c.ppc.out;
+    if (s->lost || xr_dot_cm_s == 0 || ((po->flags & PMA_PPC_FLAG_SAT_HIGH) && po->u_law > 0) ||
+        ((po->flags & PMA_PPC_FLAG_SAT_LOW) && po->u_law < 0)) {
+        return;
+    }
+    const int64_t hi = (int64_t)s->q_hyst_max_u * 65536;
+    int64_t h = s->q_hyst_u_q32 + pma_rshift_round(pma_mul32(pma_q16_smul(po->u_law, branch), s->q_hyst_k), 14);
+    h = h < 0 ? 0 : (h > hi ? hi : h);
+    s->q_hyst_u_q32 = h;
+    const pma_q16_t h16 = pma_q16_round_sat64(h, 16);
+    const pma_q16_t moved = pma_q16_smul(pma_q16_ssub(h16, s->q_hyst_u), branch);
+    pma_ppc_ff_move_q16(&s->c.ppc, -(int64_t)moved * 65536);
+    s->q_hyst_u = h16;
+}
+
 int pma_ctrl_init_arith(pma_ctrl_t *s, const pma_ctrl_setup_t *su)
 {
     CHECK(to_q16(s->period_s, &s->q_period_s));
@@ -60,11 +79,19 @@ int pma_ctrl_init_arith(pma_ctrl_t *s, const pma_ctrl_setup_t *su)
         CHECK(to_q16(s->t_u_s, &s->q_t_u_s));
         CHECK(to_q16(s->ref_ff_u_per_cm, &s->q_ref_ff_u_per_cm));
         CHECK(to_q16(s->ref_ff_lead_s, &s->q_ref_ff_lead_s));
-        /* the play operator's slope ppc.ref_ff_hyst / ppc.ref_ff_hyst_cm [input unit/cm] must fit
+        /* the hysteresis term's height, its bound, the play's half-width and its inverse must fit
          * Q16.16, and a term that would round to nothing is refused, not dropped */
-        CHECK(to_q16(s->hyst_u_per_cm, &s->q_hyst_u_per_cm));
+        CHECK(to_q16(s->hyst_u, &s->q_hyst_u));
+        CHECK(to_q16(s->hyst_max_u, &s->q_hyst_max_u));
         CHECK(to_q16(s->hyst_cm, &s->q_hyst_cm));
-        if (s->hyst_u_per_cm != 0.0f && (s->q_hyst_u_per_cm == 0 || s->q_hyst_cm == 0)) return PMA_ERR_FIXED_RANGE;
+        CHECK(to_q16(1.0f / s->hyst_cm, &s->q_hyst_inv_cm));
+        if (s->hyst_on && (s->q_hyst_cm == 0 || (s->hyst_u > 0.0f && s->q_hyst_u == 0))) {
+            return PMA_ERR_FIXED_RANGE;
+        }
+        if (!s->hyst_on) s->q_hyst_cm = 0;   /* the step's one test for the term (a word near the others) */
+        s->q_hyst_u_q32 = (int64_t)s->q_hyst_u * 65536;
+        s->q_hyst_k = (pma_q30_t)(s->hyst_k * 1073741824.0f + 0.5f);   /* Q2.30: 0 <= k < 1 (controller.c) */
+        if (s->hyst_k > 0.0f && s->q_hyst_k == 0) return PMA_ERR_FIXED_RANGE;
         CHECK(pma_ppc_init_q16(&s->c.ppc, &su->ppc));
         CHECK(pma_lpf_init_q16(&s->u_lpf, &su->u_lpf));
         return s->fallback_mode != PMA_PPC_FALLBACK_NONE ? pma_mfac_init_q16(&s->shadow, &su->mfac)
@@ -163,7 +190,9 @@ int pma_ctrl_step_q16(pma_ctrl_t *s, pma_q16_t t, pma_q16_t x, float openloop_u,
             /* the options (controller.h) choose the law's inputs */
             const pma_q16_t x_law = s->ppc_obs_pos ? q32_to_q16(s->vel.xh_q32) : x;
             const pma_q16_t v_law = s->ppc_ref_vel ? pma_q16_ssub(o->v_cm_s, o->xr_dot_cm_s) : o->v_cm_s;
-            if (s->q_ref_ff_u_per_cm != 0 || s->q_hyst_u_per_cm != 0) {
+            pma_q16_t branch = 0;   /* as controller_f32.c: (x_a - z) / b, -1..1 */
+            int adapt = 0;
+            if (s->q_ref_ff_u_per_cm != 0 || s->q_hyst_cm != 0) {
                 const pma_q16_t lead = pma_q16_smul(s->q_ref_ff_lead_s, o->xr_dot_cm_s);
                 const pma_q16_t xa = pma_q16_sadd(o->xr_cm, lead);
                 if (!s->xr0_set) {
@@ -173,14 +202,17 @@ int pma_ctrl_step_q16(pma_ctrl_t *s, pma_q16_t t, pma_q16_t x, float openloop_u,
                 }
                 const pma_q16_t ahead = pma_q16_sadd(pma_q16_ssub(o->xr_cm, s->q_xr0_cm), lead);
                 u_ref = pma_q16_smul(s->q_ref_ff_u_per_cm, ahead);
-                if (s->q_hyst_u_per_cm != 0) {   /* the play operator, as controller_f32.c */
+                if (s->q_hyst_cm != 0) {   /* the play operator, as controller_f32.c */
                     const pma_q16_t lo = pma_q16_ssub(xa, s->q_hyst_cm), hi = pma_q16_sadd(xa, s->q_hyst_cm);
                     s->q_play_z_cm = pma_q16_clamp(s->q_play_z_cm, lo, hi);
-                    const pma_q16_t hyst = pma_q16_smul(s->q_hyst_u_per_cm, pma_q16_ssub(xa, s->q_play_z_cm));
-                    u_ref = pma_q16_sadd(u_ref, hyst);
+                    branch = pma_q16_clamp(pma_q16_smul(pma_q16_ssub(xa, s->q_play_z_cm), s->q_hyst_inv_cm),
+                                           -PMA_Q16_ONE, PMA_Q16_ONE);
+                    u_ref = pma_q16_sadd(u_ref, pma_q16_smul(s->q_hyst_u, branch));
+                    adapt = s->q_hyst_k != 0;
                 }
             }
             STEP_CHECK(pma_ppc_step_ext_q16(&s->c.ppc, t, x_law, v_law, o->xr_cm, u_ref, &out));
+            if (adapt) adapt_hysteresis(s, branch, o->xr_dot_cm_s);
             out = pma_lpf_step_q16(&s->u_lpf, out);   /* as controller_f32.c */
             flags = s->c.ppc.out.flags;
             o->internal1 = s->c.ppc.out.lambda1_cm;

@@ -298,7 +298,9 @@ def test_hysteresis_feedforward_is_a_part_of_the_maps_loop_over_the_dead_bands_w
     """ppc.ref_ff_hyst: HYST_FF_PART of the half-width of the static map's loop (its median over the
     reference's range); ppc.ref_ff_hyst_cm: the smallest step gain times half that width (how far
     the muscle moves while the pressure crosses the loop), at least what keeps the play within
-    HYST_SLOPE_MAX times the map's slope, and at least HYST_PLAY_MIN_CM."""
+    HYST_SLOPE_MAX times the map's slope, and at least HYST_PLAY_MIN_CM; its adaptation
+    (ppc.ref_ff_hyst_gain_per_s, ppc.ref_ff_hyst_max): HYST_ADAPT_PER_FF of the feedforward
+    integrator's gain, within the loop's whole half-width."""
     p = [0.0, 200.0, 400.0, 600.0, 800.0]
     x_up = [-q / 400.0 for q in p]                   # the rising branch 120 kPa above the falling one
     x_down = [-(q + 120.0) / 400.0 for q in p]
@@ -310,9 +312,16 @@ def test_hysteresis_feedforward_is_a_part_of_the_maps_loop_over_the_dead_bands_w
     d = derive(m, task)
     assert d.params["ppc.ref_ff_hyst"] == pytest.approx(rules.HYST_FF_PART * 60.0 / 2.0, abs=1e-3)
     assert d.params["ppc.ref_ff_hyst_cm"] == pytest.approx(0.0002 * 60.0, abs=1e-4)
-    # no hysteresis: no term; an ideal backlash (a dead-band step that does not move): the floor
+    # adapted on the node within the loop's whole half-width, at a part of the integrator's gain
+    assert d.params["ppc.ref_ff_hyst_max"] == pytest.approx(60.0 / 2.0, abs=1e-3)
+    assert d.params["ppc.ref_ff_hyst_gain_per_s"] == pytest.approx(
+        rules.HYST_ADAPT_PER_FF * d.params["ppc.ff_gain_per_s"], rel=1e-2)
+    # no hysteresis: no term and nothing to adapt; an ideal backlash (a dead-band step that does
+    # not move): the floor
     m.static_map = StaticMap(p, x_up, p, x_up)
-    assert derive(m, task).params["ppc.ref_ff_hyst"] == 0.0
+    d0 = derive(m, task)
+    assert d0.params["ppc.ref_ff_hyst"] == 0.0
+    assert d0.params["ppc.ref_ff_hyst_gain_per_s"] == 0.0 and d0.params["ppc.ref_ff_hyst_max"] == 0.0
     m.static_map = StaticMap(p, x_up, p, x_down)
     m.steps[0].gain_cm_per_kpa = 0.0
     # the map's slope: 400 kPa per cm, 200 input units per cm at 2 kPa per unit

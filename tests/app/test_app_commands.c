@@ -8,15 +8,15 @@
  * Runs in ADC mode and, for the tables, also in plant-bridge mode. */
 #include "app_test.h"
 
-/* 1,240 bytes (x86-64) with the PPC's fallback MFAC beside the law, its funnel widening, the
- * reference feedforward's play operator and the command's low-pass (controller.h) and the supervisor's limits kept from
+/* 1,256 bytes (x86-64) with the PPC's fallback MFAC beside the law, its funnel widening, the
+ * reference feedforward's play operator with its adapted height and the command's low-pass (controller.h) and the supervisor's limits kept from
  * ARM (with their Q16.16 envelope); the Q16.16 slot adds its
  * fixed-point copies of the signals and limits, the fixed-point input and output stages with
- * the parameters they were built from (io_q16.h) and the control time in integers (1,456 bytes) */
+ * the parameters they were built from (io_q16.h) and the control time in integers (1,472 bytes) */
 #if PMA_CTRL_Q16
-_Static_assert(sizeof(pma_app_t) <= 1456u, "pma_app_t must stay small (Cortex-M0: 16 KB RAM)");
+_Static_assert(sizeof(pma_app_t) <= 1472u, "pma_app_t must stay small (Cortex-M0: 16 KB RAM)");
 #else
-_Static_assert(sizeof(pma_app_t) <= 1240u, "pma_app_t must stay small (Cortex-M0: 16 KB RAM)");
+_Static_assert(sizeof(pma_app_t) <= 1256u, "pma_app_t must stay small (Cortex-M0: 16 KB RAM)");
 #endif
 
 typedef enum { S_IDLE, S_ARMED, S_RUNNING, S_FAULT, S_COUNT } setup_state_t;

@@ -211,7 +211,7 @@ static void test_ref_ff_adds_the_maps_input_for_the_reference_ahead(void)
 /* ppc.ref_ff_hyst with ppc.ref_ff_hyst_cm: the hysteresis term is H (x_a - z) / b, z a play
  * (backlash) operator of half-width b on x_a = x_r + lead x_r' from z(0) = x_a(0), computed here
  * on the slot's own reference: +H while the sine rises (past b), -H while it falls, and across
- * in between. Refused at START: a negative H, a half-width of 0 and, in Q16.16, a slope H / b
+ * in between. Refused at START: a negative H, a half-width of 0 and, in Q16.16, a height
  * beyond the format's range. */
 static void test_ref_ff_hyst_adds_a_play_operator_on_the_reference(void)
 {
@@ -244,13 +244,109 @@ static void test_ref_ff_hyst_adds_a_play_operator_on_the_reference(void)
     par.ppc_ref_ff_hyst = h;
     par.ppc_ref_ff_hyst_cm = 0.0f;
     TEST_ASSERT_EQUAL_INT(PMA_ERR_RANGE, pma_ctrl_start(&ctl_on, &par, PERIOD_S));
-    par.ppc_ref_ff_hyst = 1000.0f;
-    par.ppc_ref_ff_hyst_cm = 0.01f;   /* 1e5 input units per cm */
+    par.ppc_ref_ff_hyst = 40000.0f;   /* beyond Q16.16 */
+    par.ppc_ref_ff_hyst_cm = 0.01f;
 #if PMA_CTRL_Q16
     TEST_ASSERT_EQUAL_INT(PMA_ERR_FIXED_RANGE, pma_ctrl_start(&ctl_on, &par, PERIOD_S));
 #else
     TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ctrl_start(&ctl_on, &par, PERIOD_S));
 #endif
+}
+
+/* ppc.ref_ff_hyst_gain_per_s on a muscle with hysteresis: a slot closes the loop around a
+ * first-order lag (TAU_S) whose input passes a backlash of half-width BACKLASH_U, the static
+ * map x = X_VENT_CM + u / MAP_U_PER_CM between the branches. Started with no hysteresis term
+ * (H = 0), the adapted height learns the backlash (H tends to it: the step of 2 H at a reversal
+ * is the one the muscle needs) and the tracking error drops below the fixed slot's; its bound
+ * holds. */
+#define TAU_S 0.03f
+#define BACKLASH_U 30.0f
+#define MAP_U_PER_CM 100.0f
+#define X_VENT_CM (-3.0f)
+
+typedef struct lagged_backlash {
+    float y_u, x_cm;   /* the backlash's output, the position */
+} lagged_backlash_t;
+
+static float lagged_backlash_step(lagged_backlash_t *m, float u)
+{
+    if (m->y_u < u - BACKLASH_U) m->y_u = u - BACKLASH_U;
+    if (m->y_u > u + BACKLASH_U) m->y_u = u + BACKLASH_U;
+    const float x_eq = X_VENT_CM + m->y_u / MAP_U_PER_CM;
+    m->x_cm += (x_eq - m->x_cm) * (PERIOD_S / TAU_S);
+    return m->x_cm;
+}
+
+static float adapted_height(const pma_ctrl_t *c)
+{
+#if PMA_CTRL_Q16
+    return pma_q16_to_f32(c->q_hyst_u);
+#else
+    return c->hyst_u;
+#endif
+}
+
+/* the RMS error [cm] of the last 4 s of a 20 s sine, the height adapted at the end in *h_u */
+static float track_backlash(pma_ctrl_t *c, float gain_per_s, float h_max_u, float *h_u)
+{
+    sine_params(&par, 1, 1, 1);
+    par.vel_fc_hz = 20.0f;
+    par.ctrl_u_min = -500.0f;
+    par.ctrl_u_max = 800.0f;
+    par.ppc_a_cm_s = 3.0f;
+    par.ppc_w1_cm = 0.2f;
+    par.ppc_w2_cm_s = 15.0f;
+    par.ppc_c = 13.0f;
+    par.ppc_t_u_s = 1.0f;
+    par.ppc_ff_gain_per_s = 700.0f;
+    par.ppc_ff_init = (OFFSET_CM - X_VENT_CM) * MAP_U_PER_CM;
+    par.ppc_ref_ff = MAP_U_PER_CM;
+    par.ppc_ref_ff_lead_s = TAU_S;
+    par.ppc_ref_ff_hyst = 0.0f;
+    par.ppc_ref_ff_hyst_cm = 0.01f;
+    par.ppc_ref_ff_hyst_gain_per_s = gain_per_s;
+    par.ppc_ref_ff_hyst_max = h_max_u;
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ctrl_start(c, &par, PERIOD_S));
+    lagged_backlash_t m = {par.ppc_ff_init, OFFSET_CM};
+    double sq = 0.0;
+    int n = 0;
+    float x = m.x_cm, u = 0.0f;
+    for (int k = 0; k < 20000; ++k) {
+        const float t = (float)k * PERIOD_S;
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ctrl_step(c, t, x, 0.0f, &u));
+        if (t >= 16.0f) {
+            const float e = x - sine_cm(t);
+            sq += (double)e * e;
+            ++n;
+        }
+        x = lagged_backlash_step(&m, u);
+    }
+    TEST_ASSERT_FALSE(c->lost);
+    *h_u = adapted_height(c);
+    return (float)sqrt(sq / n);
+}
+
+static void test_ref_ff_hyst_adapts_to_the_muscles_hysteresis(void)
+{
+    float h_fixed = -1.0f, h_adapted = -1.0f, h_bounded = -1.0f;
+    const float e_fixed = track_backlash(&ctl_off, 0.0f, 0.0f, &h_fixed);
+    const float e_adapted = track_backlash(&ctl_on, 70.0f, 4.0f * BACKLASH_U, &h_adapted);
+    printf("backlash %.1f: RMS error %.5f cm fixed (H %.2f), %.5f cm adapted (H %.2f)\n",
+           (double)BACKLASH_U, (double)e_fixed, (double)h_fixed, (double)e_adapted, (double)h_adapted);
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, h_fixed);
+    TEST_ASSERT_FLOAT_WITHIN(0.3f * BACKLASH_U, BACKLASH_U, h_adapted);
+    TEST_ASSERT_TRUE(e_adapted < 0.7f * e_fixed);
+    (void)track_backlash(&ctl_on, 70.0f, 0.5f * BACKLASH_U, &h_bounded);
+    TEST_ASSERT_FLOAT_WITHIN(1e-3f, 0.5f * BACKLASH_U, h_bounded);
+    /* refused at START: a start above the bound, a per-step gain of 1 or more, no integrator */
+    par.ppc_ref_ff_hyst = 0.6f * BACKLASH_U;
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_RANGE, pma_ctrl_start(&ctl_on, &par, PERIOD_S));
+    par.ppc_ref_ff_hyst = 0.0f;
+    par.ppc_ref_ff_hyst_gain_per_s = 1.0f / PERIOD_S;
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_RANGE, pma_ctrl_start(&ctl_on, &par, PERIOD_S));
+    par.ppc_ref_ff_hyst_gain_per_s = 70.0f;
+    par.ppc_ff_gain_per_s = 0.0f;
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_RANGE, pma_ctrl_start(&ctl_on, &par, PERIOD_S));
 }
 
 /* ppc.u_lpf_hz: two slots on the same noisy samples, one with the command's low-pass. The law
@@ -373,6 +469,7 @@ int main(void)
     RUN_TEST(test_obs_pos_takes_the_error_from_the_observer);
     RUN_TEST(test_ref_ff_adds_the_maps_input_for_the_reference_ahead);
     RUN_TEST(test_ref_ff_hyst_adds_a_play_operator_on_the_reference);
+    RUN_TEST(test_ref_ff_hyst_adapts_to_the_muscles_hysteresis);
     RUN_TEST(test_u_lpf_filters_the_laws_command);
     RUN_TEST(test_time_beyond_the_fixed_point_range);
     RUN_TEST(test_swing_limit_to_limit_after_a_widening_hands_over);

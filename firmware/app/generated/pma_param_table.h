@@ -43,6 +43,8 @@ enum pma_param_id {
     PMA_PARAM_PPC_REF_FF_HYST = 55,
     PMA_PARAM_PPC_REF_FF_HYST_CM = 56,
     PMA_PARAM_PPC_U_LPF_HZ = 57,
+    PMA_PARAM_PPC_REF_FF_HYST_GAIN_PER_S = 58,
+    PMA_PARAM_PPC_REF_FF_HYST_MAX = 59,
     PMA_PARAM_PID_KP = 64,
     PMA_PARAM_PID_KI = 65,
     PMA_PARAM_PID_KD = 66,
@@ -84,9 +86,9 @@ enum pma_param_id {
     PMA_PARAM_SAFETY_SAFE_KPA = 168,
 };
 
-#define PMA_PARAM_COUNT 75u
+#define PMA_PARAM_COUNT 77u
 /* CRC-32 of the table (pmactl.protocol.param_table_hash): DEVICE_INFO's ParamTableHash. */
-#define PMA_PARAM_TABLE_HASH 0x06CF54F9u
+#define PMA_PARAM_TABLE_HASH 0xB57CD05Eu
 
 #define PMA_SYS_PLANT_BRIDGE_OFF 0u
 #define PMA_SYS_PLANT_BRIDGE_ON 1u
@@ -149,6 +151,8 @@ typedef struct pma_params {
     float ppc_ref_ff_hyst;             /* id 55 [input unit] */
     float ppc_ref_ff_hyst_cm;          /* id 56 [cm] */
     float ppc_u_lpf_hz;                /* id 57 [Hz] */
+    float ppc_ref_ff_hyst_gain_per_s;  /* id 58 [1/s] */
+    float ppc_ref_ff_hyst_max;         /* id 59 [input unit] */
     float pid_kp;                      /* id 64 [input unit/cm] */
     float pid_ki;                      /* id 65 [input unit/(cm*s)] */
     float pid_kd;                      /* id 66 [input unit*s/cm] */

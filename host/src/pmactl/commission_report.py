@@ -69,7 +69,8 @@ def text(r: Result) -> list[str]:
         f"delay margin {1000 * f['mfac_delay_margin_s']:.0f} ms",
         f"hysteresis: {f['hysteresis_kpa_over_ref']:.0f} kPa over the reference's range; the reference "
         f"feedforward's term +-{d.params['ppc.ref_ff_hyst']:g} input units across a play of "
-        f"{d.params['ppc.ref_ff_hyst_cm']:g} cm; MFAC's reset threshold {d.params['mfac.eps']:g}",
+        f"{d.params['ppc.ref_ff_hyst_cm']:g} cm, adapted on the node at {d.params['ppc.ref_ff_hyst_gain_per_s']:g} "
+        f"1/s within 0..{d.params['ppc.ref_ff_hyst_max']:g}; MFAC's reset threshold {d.params['mfac.eps']:g}",
         f"start: the armed muscle rests at {f['x_armed_cm']:.3f} cm (the rising branch at act.p0_kpa "
         f"{d.params['act.p0_kpa']:g} kPa); the start held at {f['p_start_kpa']:.0f} kPa ("
         + ("the rising branch: further along it" if f["start_on_rising_branch"] else "the middle of the branches")

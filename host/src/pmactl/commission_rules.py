@@ -103,6 +103,12 @@ HYST_PLAY_MIN_CM = 0.001     # the play's half-width at least 10 um (an ideal ba
 # an error at every reversal. On 303 runs of drawn and shipped rigs the cap made 42 better (up to
 # 45 %), 5 worse (up to 14 %, each still ahead of MFAC)
 HYST_SLOPE_MAX = 4.0
+# the hysteresis term's adaptation on the node (ppc.ref_ff_hyst_gain_per_s): this part of the feedforward
+# integrator's gain. Each reversal moves H by about 2 x this part of the gap to the step the law
+# had to make (docs/commissioning.md): 6 % per reversal, settled after some tens of them; a larger
+# part follows a slow valve's and creep's lag as if it were hysteresis (0.1: the paper's rig's
+# variants better, the realistic profiles' slow valves up to 40 % worse in a Case 3 window)
+HYST_ADAPT_PER_FF = 0.03
 
 
 class CommissionError(ValueError):
@@ -584,8 +590,7 @@ def _hysteresis_ff(m: Measured, xs: list[float], ref_ff: float) -> tuple[float, 
     height = HYST_FF_PART * 0.5 * h_kpa / m.kpa_per_u
     g_dead = min(abs(s.gain_cm_per_kpa) for s in m.steps)
     gentle = height / (HYST_SLOPE_MAX * abs(ref_ff)) if ref_ff != 0.0 else 0.0
-    # the Q16.16 builds hold H / b (input units per cm) below 32767: b at least H / 16384
-    return height, max(g_dead * 0.5 * h_kpa, gentle, HYST_PLAY_MIN_CM, height / 16384.0), h_kpa
+    return height, max(g_dead * 0.5 * h_kpa, gentle, HYST_PLAY_MIN_CM), h_kpa
 
 
 def derive(m: Measured, task: Task) -> Derivation:
@@ -710,6 +715,7 @@ def derive(m: Measured, task: Task) -> Derivation:
     mfac = mfac_gains(gain, tau, theta_eff, m.period_s, mfac_ki * m.period_s)
     ref_ff_lead = tau + theta_eff
     hyst_ff, hyst_cm, hyst_kpa = _hysteresis_ff(m, [float(x) for x in xs], ref_ff)
+    hyst_max = hyst_ff / HYST_FF_PART   # the static loop's half-width: no minor loop is wider
 
     w1_min = NOISE_SIGMAS_IN_W1 * m.noise_cm
     promises = [f"|e| < w1 = {task.w1_cm:g} cm needs w1 >= {w1_min:.4f} cm for this sensor's noise "
@@ -765,6 +771,8 @@ def derive(m: Measured, task: Task) -> Derivation:
         "ppc.ref_ff_lead_s": round(ref_ff_lead, 4),
         "ppc.ref_ff_hyst": round(hyst_ff, 3),
         "ppc.ref_ff_hyst_cm": round(hyst_cm, 4),
+        "ppc.ref_ff_hyst_gain_per_s": round(HYST_ADAPT_PER_FF * r * k_p, 3) if hyst_max > 0.0 else 0.0,
+        "ppc.ref_ff_hyst_max": round(hyst_max, 3),
         "ppc.obs_pos": 1,
         "vel.kind": 1,
         "vel.fc_hz": round(fc_hz, 2),

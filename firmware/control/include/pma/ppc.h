@@ -164,6 +164,13 @@ static inline int pma_ppc_step_f32(pma_ppc_f32_t *s, float t_s, float x_cm, floa
 {
     return pma_ppc_step_ext_f32(s, t_s, x_cm, v_cm_s, xr_cm, 0.0f, u);
 }
+/* Moves the feedforward integrator u_ff by du_u [input unit], without a step: a caller that
+ * takes a part of the steady input into u_ext (the application's adapted hysteresis term)
+ * hands it over so that u_ff + u_ext stays where the integrator had it. */
+static inline void pma_ppc_ff_move_f32(pma_ppc_f32_t *s, float du_u)
+{
+    s->u_ff += du_u;
+}
 
 /* Fixed-point variant: same config (converted and range-checked at init),
  * signals in Q16.16 with the same units, dimensionless r and alpha in Q2.30. */
@@ -207,6 +214,12 @@ static inline int pma_ppc_step_q16(pma_ppc_q16_t *s, pma_q16_t t_s, pma_q16_t x_
                                    pma_q16_t v_cm_s, pma_q16_t xr_cm, pma_q16_t *u)
 {
     return pma_ppc_step_ext_q16(s, t_s, x_cm, v_cm_s, xr_cm, 0, u);
+}
+/* As pma_ppc_ff_move_f32, du in input units with 32 fractional bits (the accumulator's);
+ * meaningful with the feedforward on (ff_gain_per_s > 0: the step reads u_ff from it only then). */
+static inline void pma_ppc_ff_move_q16(pma_ppc_q16_t *s, int64_t du_q32)
+{
+    s->u_ff_q32 += du_q32;
 }
 
 #endif /* PMA_PPC_H */
