@@ -209,6 +209,24 @@ def test_derive_follows_the_rules():
     assert len(d.warnings) == 1 and "measured stroke" in d.warnings[0]
 
 
+def test_loop_gain_is_at_least_a_part_of_the_static_maps():
+    """Steps that stay in the hysteresis' dead band read a gain far below the static map's slope:
+    the loop is shaped on LOOP_GAIN_PER_MAP_MIN of the map's gain instead (1 / |ppc.ref_ff|), and
+    the report says why; steps at the map's gain keep their own."""
+    d = derive(_measured(), TASK)
+    assert d.figures["loop_gain_cm_per_u"] == pytest.approx(0.003)
+    assert not any("dead band" in w for w in d.warnings)
+    m = _measured()
+    for s in m.steps:
+        s.gain_cm_per_kpa = -0.0003                  # a tenth of the steps above
+    d = derive(m, TASK)
+    map_gain = 1.0 / abs(d.params["ppc.ref_ff"])
+    assert 0.0003 < rules.LOOP_GAIN_PER_MAP_MIN * map_gain
+    assert d.figures["loop_gain_cm_per_u"] == pytest.approx(rules.LOOP_GAIN_PER_MAP_MIN * map_gain, rel=1e-5)
+    assert d.figures["gain_cm_per_u"] == pytest.approx(0.0003)     # MFAC's gain stays the steps'
+    assert any("dead band" in w for w in d.warnings)
+
+
 def test_the_start_is_held_on_the_path_from_the_armed_muscle():
     # ARM raises the pressure to p0 = the middle of the branches at the band's middle (-1.3 cm:
     # 350 kPa), so the armed muscle rests on the rising branch there, at -1.15 cm

@@ -103,6 +103,11 @@ HYST_PLAY_MIN_CM = 0.001     # the play's half-width at least 10 um (an ideal ba
 # an error at every reversal. On 303 runs of drawn and shipped rigs the cap made 42 better (up to
 # 45 %), 5 worse (up to 14 %, each still ahead of MFAC)
 HYST_SLOPE_MAX = 4.0
+# the gain the law's loop is shaped on at least this part of the static map's slope over the
+# reference's range. On 447 commissionings of shipped and drawn rigs the steps' gain sat at
+# 0.35-1.05 of the map's (5-95 %); at 0.11 (a 49 N friction: three of the six steps in its dead
+# band) the loop came out nine times too stiff and swung its input from limit to limit at 4 Hz
+LOOP_GAIN_PER_MAP_MIN = 0.25
 # the hysteresis term's adaptation on the node (ppc.ref_ff_hyst_gain_per_s): this part of the feedforward
 # integrator's gain. Each reversal moves H by about 2 x this part of the gap to the step the law
 # had to make (docs/commissioning.md): 6 % per reversal, settled after some tens of them; a larger
@@ -665,6 +670,15 @@ def derive(m: Measured, task: Task) -> Derivation:
     # tau + theta ahead for the lag and dead time of the step responses
     xs = np.linspace(*_ref_span(task, reach_lo, reach_hi), 9)
     ref_ff = float(np.polyfit(xs, [u_of(m.static_map.hold_kpa(x)) for x in xs], 1)[0])
+    # the loop's gain at least LOOP_GAIN_PER_MAP_MIN of the static map's: below it, most of the steps
+    # stayed in the hysteresis' dead band, and a loop shaped on them is that much too stiff wherever
+    # the muscle moves along a branch
+    map_gain = 1.0 / abs(ref_ff) if ref_ff != 0.0 else 0.0
+    if loop_gain < LOOP_GAIN_PER_MAP_MIN * map_gain:
+        warnings.append(f"the step responses' gain {loop_gain:.3g} cm per input unit is below "
+                        f"{LOOP_GAIN_PER_MAP_MIN:g} of the static map's {map_gain:.3g}: most steps stayed in the "
+                        "hysteresis' dead band (a large friction); the loop is shaped on that part of the map's gain")
+        loop_gain = LOOP_GAIN_PER_MAP_MIN * map_gain
     # the input's mean rate that the reference needs, against which the sensor's noise through the
     # law is weighed (CHATTER_WARN_PER_NEED, Task.noise_limit)
     mean_speed = 2.0 / math.pi * task.speed_cm_s if task.mean_speed_cm_s is None else task.mean_speed_cm_s
