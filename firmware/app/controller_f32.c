@@ -40,8 +40,7 @@ static float clampf(float v, float lo, float hi)
 static void adapt_hysteresis(pma_ctrl_t *s, float branch, float xr_dot_cm_s)
 {
     const pma_ppc_out_f32_t *po = &s->c.ppc.out;
-    if (s->lost || xr_dot_cm_s == 0.0f || ((po->flags & PMA_PPC_FLAG_SAT_HIGH) && po->u_law > 0.0f) ||
-        ((po->flags & PMA_PPC_FLAG_SAT_LOW) && po->u_law < 0.0f)) {
+    if (s->lost || xr_dot_cm_s == 0.0f || pma_ppc_ff_held(po->flags, po->u_law > 0.0f, po->u_law < 0.0f)) {
         return;
     }
     const float h = clampf(s->hyst_u + s->hyst_k * po->u_law * branch, 0.0f, s->hyst_max_u);

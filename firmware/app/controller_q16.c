@@ -51,10 +51,7 @@ static pma_q16_t q16_abs(pma_q16_t a)
 static void adapt_hysteresis(pma_ctrl_t *s, pma_q16_t branch, pma_q16_t xr_dot_cm_s)
 {
     const pma_ppc_out_q16_t *po = &s->c.ppc.out;
-    if (s->lost || xr_dot_cm_s == 0 || ((po->flags & PMA_PPC_FLAG_SAT_HIGH) && po->u_law > 0) ||
-        ((po->flags & PMA_PPC_FLAG_SAT_LOW) && po->u_law < 0)) {
-        return;
-    }
+    if (s->lost || xr_dot_cm_s == 0 || pma_ppc_ff_held(po->flags, po->u_law > 0, po->u_law < 0)) return;
     const int64_t hi = (int64_t)s->q_hyst_max_u * 65536;
     int64_t h = s->q_hyst_u_q32 + pma_rshift_round(pma_mul32(pma_q16_smul(po->u_law, branch), s->q_hyst_k), 14);
     h = h < 0 ? 0 : (h > hi ? hi : h);

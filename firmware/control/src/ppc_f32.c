@@ -170,8 +170,7 @@ int pma_ppc_step_ext_f32(pma_ppc_f32_t *s, float t_s, float x_cm, float v_cm_s, 
     /* optional steady-state feedforward: integrate the law's output unless the
      * output is saturated in the direction the law pushes (anti-windup) */
     if (s->cfg.ff_gain_per_s > 0.0f &&
-        !((o.flags & PMA_PPC_FLAG_SAT_HIGH) && o.u_law > 0.0f) &&
-        !((o.flags & PMA_PPC_FLAG_SAT_LOW) && o.u_law < 0.0f)) {
+        !pma_ppc_ff_held(o.flags, o.u_law > 0.0f, o.u_law < 0.0f)) {
         float ff = s->u_ff + s->cfg.ff_gain_per_s * s->cfg.period_s * o.u_law;
         /* bounded so that u_ff + u_ext stays within the input range (its wind-up bound) */
         s->u_ff = fminf(fmaxf(ff, s->cfg.u_min - u_ext), s->cfg.u_max - u_ext);

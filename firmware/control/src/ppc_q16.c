@@ -255,8 +255,7 @@ int pma_ppc_step_ext_q16(pma_ppc_q16_t *s, pma_q16_t t_s, pma_q16_t x_cm, pma_q1
     }
 
     if (s->ff_k > 0 &&
-        !((o->flags & PMA_PPC_FLAG_SAT_HIGH) && o->u_law > 0) &&
-        !((o->flags & PMA_PPC_FLAG_SAT_LOW) && o->u_law < 0)) {
+        !pma_ppc_ff_held(o->flags, o->u_law > 0, o->u_law < 0)) {
         int64_t ff = s->u_ff_q32 + pma_rshift_round(pma_mul32(o->u_law, s->ff_k), 14); /* Q32 */
         /* bounded so that u_ff + u_ext stays within the input range (its wind-up bound) */
         const int64_t lo = ((int64_t)s->u_min - u_ext) * 65536, hi = ((int64_t)s->u_max - u_ext) * 65536;

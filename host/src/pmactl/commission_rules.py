@@ -729,7 +729,8 @@ def derive(m: Measured, task: Task) -> Derivation:
     mfac = mfac_gains(gain, tau, theta_eff, m.period_s, mfac_ki * m.period_s)
     ref_ff_lead = tau + theta_eff
     hyst_ff, hyst_cm, hyst_kpa = _hysteresis_ff(m, [float(x) for x in xs], ref_ff)
-    hyst_max = hyst_ff / HYST_FF_PART   # the static loop's half-width: no minor loop is wider
+    hyst_max = 0.5 * hyst_kpa / m.kpa_per_u   # the static loop's half-width: no minor loop is wider
+    ff_gain = r * k_p                         # the feedforward integrator's gain [1/s]
 
     w1_min = NOISE_SIGMAS_IN_W1 * m.noise_cm
     promises = [f"|e| < w1 = {task.w1_cm:g} cm needs w1 >= {w1_min:.4f} cm for this sensor's noise "
@@ -778,14 +779,14 @@ def derive(m: Measured, task: Task) -> Derivation:
         "ppc.a_cm_s": round(a, 4),
         "ppc.w2_cm_s": round(w2, 4),
         "ppc.c": round(c, 4),
-        "ppc.ff_gain_per_s": round(r * k_p, 3),
+        "ppc.ff_gain_per_s": round(ff_gain, 3),
         "ppc.ff_init": round(u_start, 2),
         "ppc.ref_vel": 1,
         "ppc.ref_ff": round(ref_ff, 3),
         "ppc.ref_ff_lead_s": round(ref_ff_lead, 4),
         "ppc.ref_ff_hyst": round(hyst_ff, 3),
         "ppc.ref_ff_hyst_cm": round(hyst_cm, 4),
-        "ppc.ref_ff_hyst_gain_per_s": round(HYST_ADAPT_PER_FF * r * k_p, 3) if hyst_max > 0.0 else 0.0,
+        "ppc.ref_ff_hyst_gain_per_s": round(HYST_ADAPT_PER_FF * ff_gain, 3) if hyst_max > 0.0 else 0.0,
         "ppc.ref_ff_hyst_max": round(hyst_max, 3),
         "ppc.obs_pos": 1,
         "vel.kind": 1,

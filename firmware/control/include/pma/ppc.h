@@ -117,6 +117,14 @@ int pma_ppc_validate_config(const pma_ppc_config_t *cfg);
 #define PMA_PPC_FLAG_WIDEN2   0x80u   /* widen_r: w2's funnel widened this step (instead of a clamp) */
 #define PMA_PPC_FLAG_WIDE     0x100u  /* widen_r: a funnel is still wider than assigned (g < 1) */
 
+/* The feedforward integrator's anti-windup: it holds while the output is clamped in the
+ * direction the law pushes (flags: the step's PMA_PPC_FLAG_*; law_up / law_down: u_law > 0 /
+ * u_law < 0). One rule for the integrator and for whatever integrates beside it. */
+static inline int pma_ppc_ff_held(uint32_t flags, int law_up, int law_down)
+{
+    return ((flags & PMA_PPC_FLAG_SAT_HIGH) && law_up) || ((flags & PMA_PPC_FLAG_SAT_LOW) && law_down);
+}
+
 /* Internals of the last step, for telemetry (float variant). */
 typedef struct pma_ppc_out_f32 {
     float alpha, e_cm, lambda1_cm, chi, theta_cm_s, lambda2_cm_s, delta, beta_s_cm;
