@@ -147,7 +147,9 @@ def test_a_step_that_did_not_move_takes_the_lag_of_those_that_did():
     lag = 0.1                                  # the median of the moving steps' lags
     slopes = [0.0002 / lag] * 3 + [0.004 / 0.1, 0.003 / 0.12, 0.005 / 0.09]
     assert f["tau_s"] == pytest.approx(lag)
-    assert f["loop_gain_cm_per_u"] == pytest.approx(float(np.median(slopes)) * lag)
+    # the median of all six, but at least 1 / GM_MIN of the moving steps' (the next test)
+    assert f["loop_gain_cm_per_u"] == pytest.approx(
+        max(float(np.median(slopes)), float(np.median(slopes[3:])) / rules.GM_MIN) * lag)
     assert f["gain_cm_per_u"] == pytest.approx(0.0016)          # MFAC's median gain: all six steps
     for s in m.steps:
         s.first_move_s = math.nan                                # nothing measured: the fits stand
@@ -155,7 +157,38 @@ def test_a_step_that_did_not_move_takes_the_lag_of_those_that_did():
     fitted = [2e-4, 1.4e-3, 2e-3, 0.1, 0.12, 0.09]
     assert unmeasured["loop_gain_cm_per_u"] == pytest.approx(
         float(np.median([abs(s.gain_cm_per_kpa) / t for s, t in zip(m.steps, fitted)])) * float(np.median(fitted)))
-    assert f["kc_u_per_cm"] > 2 * unmeasured["kc_u_per_cm"]
+    assert f["kc_u_per_cm"] > 1.5 * unmeasured["kc_u_per_cm"]   # the noise fits' loop: that much too slow
+
+
+def test_loop_gain_keeps_the_moving_steps_within_its_gain_margin():
+    """Half the steps into the dead band (next to no gain, no movement measured: the median of all
+    six lands between them and the moving ones) and three moving at three times that median: a
+    loop shaped on the median would meet three times its gain wherever the muscle moves along a
+    branch, beyond the gain margin GM_MIN it keeps. The loop is shaped on 1 / GM_MIN of the
+    moving steps' median slope instead, and as built it stays stable at their gain (gain margin
+    above 1 there). Where every step moves alike, the median of all stands."""
+    lag = 0.15
+    dead = [StepFit(300.0 + 200 * i, 45.0, g, lag, 0.05, 0.0) for i, g in enumerate((-0.0001, -0.0001, -0.001))]
+    moving = [StepFit(300.0 + 200 * i, -45.0, g, lag, 0.05, 0.0, first_move_s=0.06)
+              for i, g in enumerate((-0.0023, -0.0051, -0.0054))]
+    m = _measured()
+    m.steps = dead + moving
+    m.static_map = StaticMap([0.0, 900.0], [-0.3, -2.7], [0.0, 900.0], [-0.4, -2.8])   # 0.0027 cm/kPa
+    d = derive(m, TASK)
+    f = d.figures
+    median_all = float(np.median([0.0001, 0.0001, 0.001, 0.0023, 0.0051, 0.0054]))       # 0.00165
+    assert median_all < 0.0051 / rules.GM_MIN
+    assert median_all > rules.LOOP_GAIN_PER_MAP_MIN / abs(d.params["ppc.ref_ff"])       # not the map's floor
+    assert f["loop_gain_cm_per_u"] == pytest.approx(0.0051 / rules.GM_MIN)
+    assert f["gain_cm_per_u"] == pytest.approx(median_all)        # MFAC's median gain: all six steps
+    p = d.params
+    as_built = law_margins(f["k_v_u_per_cm_s"], f["k_p_per_s"], p["ppc.ff_gain_per_s"], p["vel.fc_hz"],
+                           0.0051, f["tau_s"], f["theta_eff_s"], p["ppc.u_lpf_hz"])
+    assert as_built["gain_margin"] > 1.0
+    alike = _measured()
+    for s in alike.steps:
+        s.first_move_s = 0.02
+    assert derive(alike, TASK).figures["loop_gain_cm_per_u"] == pytest.approx(0.003)
 
 
 def test_fit_step_refuses_a_flat_or_short_record():

@@ -654,6 +654,14 @@ def derive(m: Measured, task: Task) -> Derivation:
     # and the moving steps' lags are long, a loop faster than the moving steps allow
     slope = float(np.median([abs(s.gain_cm_per_kpa) / lag for s, lag in zip(m.steps, lags)]))   # cm/kPa/s
     loop_gain = slope * tau * m.kpa_per_u                                                        # cm per input unit
+    # ... and at least 1 / GM_MIN of the moving steps' own (their median slope): the steps into the
+    # dead band, with next to no gain, pull the median of all down, and where half of them stayed
+    # there the loop came out three times stiffer than the muscle moving along a branch and hunted
+    # at 5 Hz from limit to limit. A loop that keeps GM_MIN as built stays stable up to GM_MIN
+    # times the gain it was shaped on, so this keeps it stable where the muscle moves
+    moving_slopes = [abs(s.gain_cm_per_kpa) / lag for s, lag in zip(m.steps, lags) if math.isfinite(s.first_move_s)]
+    if moving_slopes:
+        loop_gain = max(loop_gain, float(np.median(moving_slopes)) * tau * m.kpa_per_u / GM_MIN)
     theta_fit = float(np.median([s.theta_s for s in m.steps]))
     # the fit's dead time, but never less than the steps' first movement: a response whose slow
     # tail (creep, a slow valve stage) dominates fits as a long lag with no dead time, though the
