@@ -23,7 +23,7 @@ from hil.commissioned import before_commissioning
 from hil.offline_bus import OfflineBus
 from pmactl import cli, commission_report
 from pmactl.client import NodeStateError, PmaNode
-from pmactl.commission import TOUCHED, CommissionAborted, Commissioning
+from pmactl.commission import TOUCHED, CommissionAborted, Commissioning, Result
 from pmactl.commission_rules import (
     CommissionError,
     Measured,
@@ -180,7 +180,11 @@ def test_loop_gain_keeps_the_moving_steps_within_its_gain_margin():
     assert median_all < 0.0051 / rules.GM_MIN
     assert median_all > rules.LOOP_GAIN_PER_MAP_MIN / abs(d.params["ppc.ref_ff"])       # not the map's floor
     assert f["loop_gain_cm_per_u"] == pytest.approx(0.0051 / rules.GM_MIN)
+    assert f["loop_gain_moving_cm_per_u"] == pytest.approx(0.0051)
+    assert f["loop_gain_median_cm_per_u"] == pytest.approx(median_all)
     assert f["gain_cm_per_u"] == pytest.approx(median_all)        # MFAC's median gain: all six steps
+    line = next(x for x in commission_report.text(Result(m, d, {}, 1.0, 1.0)) if x.startswith("step responses"))
+    assert "the moving steps' 0.00510 over the gain margin 2" in line
     p = d.params
     as_built = law_margins(f["k_v_u_per_cm_s"], f["k_p_per_s"], p["ppc.ff_gain_per_s"], p["vel.fc_hz"],
                            0.0051, f["tau_s"], f["theta_eff_s"], p["ppc.u_lpf_hz"])
@@ -188,7 +192,11 @@ def test_loop_gain_keeps_the_moving_steps_within_its_gain_margin():
     alike = _measured()
     for s in alike.steps:
         s.first_move_s = 0.02
-    assert derive(alike, TASK).figures["loop_gain_cm_per_u"] == pytest.approx(0.003)
+    d_alike = derive(alike, TASK)
+    assert d_alike.figures["loop_gain_cm_per_u"] == pytest.approx(0.003)
+    line = next(x for x in commission_report.text(Result(alike, d_alike, {}, 1.0, 1.0))
+                if x.startswith("step responses"))
+    assert "moving steps" not in line
 
 
 def test_fit_step_refuses_a_flat_or_short_record():

@@ -51,7 +51,7 @@ def text(r: Result) -> list[str]:
         f"{min(m.static_map.p_down_kpa):.0f}..{max(m.static_map.p_down_kpa):.0f} kPa; hysteresis "
         f"{f['hysteresis_kpa_at_p0']:.0f} kPa at the preset pressure",
         f"step responses (median of {len(m.steps)}): gain {f['gain_cm_per_u']:.5f} cm per input unit "
-        f"({f['loop_gain_cm_per_u']:.5f} at the loop's crossover), "
+        f"({f['loop_gain_cm_per_u']:.5f} at the loop's crossover{_moving_gain(f)}), "
         f"lag {1000 * f['tau_s']:.1f} ms{_early_lag(f)}, dead time {1000 * f['theta_s']:.1f} ms",
         f"loop: SIMC PI Kc {f['kc_u_per_cm']:.1f} per cm, tau_I {1000 * f['tau_i_s']:.1f} ms "
         f"(tau_c {f['tau_c_s'] / f['theta_eff_s']:.2f} theta_eff); as a PID alone "
@@ -93,6 +93,17 @@ def _early_lag(f: dict[str, float]) -> str:
     if f["tau_s"] >= f["tau_fit_s"]:
         return ""
     return f" (the early parts' lag; the fits, stretched by a slow tail, say {1000 * f['tau_fit_s']:.1f} ms)"
+
+
+def _moving_gain(f: dict[str, float]) -> str:
+    """Where the loop's gain is the moving steps' over GM_MIN (the steps into the dead band pulled
+    the median of all below it), says so."""
+    moving = f.get("loop_gain_moving_cm_per_u", 0.0)
+    if not (moving > 0 and f["loop_gain_cm_per_u"] > f.get("loop_gain_median_cm_per_u", math.inf)
+            and math.isclose(f["loop_gain_cm_per_u"], moving / GM_MIN, rel_tol=1e-9)):
+        return ""
+    return (f": the moving steps' {moving:.5f} over the gain margin {GM_MIN:g}, above the median of all "
+            f"{f['loop_gain_median_cm_per_u']:.5f}, which the steps into the dead band pulled down")
 
 
 def _lpf(params: dict[str, Any]) -> str:

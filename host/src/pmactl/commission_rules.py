@@ -660,8 +660,9 @@ def derive(m: Measured, task: Task) -> Derivation:
     # at 5 Hz from limit to limit. A loop that keeps GM_MIN as built stays stable up to GM_MIN
     # times the gain it was shaped on, so this keeps it stable where the muscle moves
     moving_slopes = [abs(s.gain_cm_per_kpa) / lag for s, lag in zip(m.steps, lags) if math.isfinite(s.first_move_s)]
-    if moving_slopes:
-        loop_gain = max(loop_gain, float(np.median(moving_slopes)) * tau * m.kpa_per_u / GM_MIN)
+    loop_gain_median = loop_gain
+    moving_gain = float(np.median(moving_slopes)) * tau * m.kpa_per_u if moving_slopes else 0.0
+    loop_gain = max(loop_gain, moving_gain / GM_MIN)
     theta_fit = float(np.median([s.theta_s for s in m.steps]))
     # the fit's dead time, but never less than the steps' first movement: a response whose slow
     # tail (creep, a slow valve stage) dominates fits as a long lag with no dead time, though the
@@ -810,7 +811,9 @@ def derive(m: Measured, task: Task) -> Derivation:
         "safety.x_min_cm": task.x_min_cm,
         "safety.x_max_cm": task.x_max_cm,
     }
-    figures = {"gain_cm_per_u": gain, "loop_gain_cm_per_u": loop_gain, "tau_s": tau, "tau_fit_s": tau_fit,
+    figures = {"gain_cm_per_u": gain, "loop_gain_cm_per_u": loop_gain,
+               "loop_gain_median_cm_per_u": loop_gain_median, "loop_gain_moving_cm_per_u": moving_gain,
+               "tau_s": tau, "tau_fit_s": tau_fit,
                "theta_s": theta, "theta_fit_s": theta_fit,
                "theta_first_move_s": theta_move, "theta_eff_s": theta_eff, "tau_c_s": tau_c,
                "noise_cm": m.noise_cm, "stroke_min_cm": lo, "stroke_max_cm": hi, "hysteresis_kpa_at_p0": hold_hyst,
