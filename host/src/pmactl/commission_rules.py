@@ -642,32 +642,33 @@ def derive(m: Measured, task: Task) -> Derivation:
     # a step that moved less than MOVED_SIGMAS noise deviations (into the hysteresis' dead band) has a
     # gain but no lag to read: its fit is of the noise, often a lag of a sample or two, whose slope
     # g / tau would pass for the fastest step of all. It takes the lag of the steps that moved
-    moving_lags = [lag for s, lag in zip(m.steps, lags) if math.isfinite(s.first_move_s)]
+    moved = [math.isfinite(s.first_move_s) for s in m.steps]
+    moving_lags = [lag for lag, mv in zip(lags, moved) if mv]
     if moving_lags:
         lag_moving = float(np.median(moving_lags))
-        lags = [lag if math.isfinite(s.first_move_s) else lag_moving for s, lag in zip(m.steps, lags)]
+        lags = [lag if mv else lag_moving for lag, mv in zip(lags, moved)]
     tau = float(np.median(lags))
     tau_fit = float(np.median([s.tau_s for s in m.steps]))
     # the gain the law's loop is shaped on: the median of the steps' slopes g / tau (what its
     # crossover meets), times the median lag. The median gain over the median lag would pair one
     # step's gain with another's lag: where the steps into the dead band pull the median gain down
     # and the moving steps' lags are long, a loop faster than the moving steps allow
-    slope = float(np.median([abs(s.gain_cm_per_kpa) / lag for s, lag in zip(m.steps, lags)]))   # cm/kPa/s
-    loop_gain = slope * tau * m.kpa_per_u                                                        # cm per input unit
+    slopes = [abs(s.gain_cm_per_kpa) / lag for s, lag in zip(m.steps, lags)]                    # cm/kPa/s
+    loop_gain_median = float(np.median(slopes)) * tau * m.kpa_per_u                              # cm per input unit
     # ... and at least 1 / GM_MIN of the moving steps' own (their median slope): the steps into the
     # dead band, with next to no gain, pull the median of all down, and where half of them stayed
     # there the loop came out three times stiffer than the muscle moving along a branch and hunted
     # at 5 Hz from limit to limit. A loop that keeps GM_MIN as built stays stable up to GM_MIN
     # times the gain it was shaped on, so this keeps it stable where the muscle moves
-    moving_slopes = [abs(s.gain_cm_per_kpa) / lag for s, lag in zip(m.steps, lags) if math.isfinite(s.first_move_s)]
-    loop_gain_median = loop_gain
+    moving_slopes = [slope for slope, mv in zip(slopes, moved) if mv]
     moving_gain = float(np.median(moving_slopes)) * tau * m.kpa_per_u if moving_slopes else 0.0
-    loop_gain = max(loop_gain, moving_gain / GM_MIN)
+    on_moving_steps = moving_gain / GM_MIN > loop_gain_median
+    loop_gain = moving_gain / GM_MIN if on_moving_steps else loop_gain_median
     theta_fit = float(np.median([s.theta_s for s in m.steps]))
     # the fit's dead time, but never less than the steps' first movement: a response whose slow
     # tail (creep, a slow valve stage) dominates fits as a long lag with no dead time, though the
     # loop still waits that long for any answer, and too short a dead time is what costs margin
-    moves = [s.first_move_s for s in m.steps if math.isfinite(s.first_move_s)]
+    moves = [s.first_move_s for s, mv in zip(m.steps, moved) if mv]
     theta_move = float(np.median(moves)) if moves else 0.0
     theta = max(theta_fit, theta_move)
     theta_eff = theta + m.period_s             # one sample of the loop's own delay
@@ -688,6 +689,7 @@ def derive(m: Measured, task: Task) -> Derivation:
                         f"{LOOP_GAIN_PER_MAP_MIN:g} of the static map's {map_gain:.3g}: most steps stayed in the "
                         "hysteresis' dead band (a large friction); the loop is shaped on that part of the map's gain")
         loop_gain = LOOP_GAIN_PER_MAP_MIN * map_gain
+        on_moving_steps = False
     # the input's mean rate that the reference needs, against which the sensor's noise through the
     # law is weighed (CHATTER_WARN_PER_NEED, Task.noise_limit)
     mean_speed = 2.0 / math.pi * task.speed_cm_s if task.mean_speed_cm_s is None else task.mean_speed_cm_s
@@ -813,6 +815,7 @@ def derive(m: Measured, task: Task) -> Derivation:
     }
     figures = {"gain_cm_per_u": gain, "loop_gain_cm_per_u": loop_gain,
                "loop_gain_median_cm_per_u": loop_gain_median, "loop_gain_moving_cm_per_u": moving_gain,
+               "loop_gain_on_moving_steps": float(on_moving_steps),
                "tau_s": tau, "tau_fit_s": tau_fit,
                "theta_s": theta, "theta_fit_s": theta_fit,
                "theta_first_move_s": theta_move, "theta_eff_s": theta_eff, "tau_c_s": tau_c,
