@@ -155,20 +155,27 @@ def case3_factor_windows(s: Summary) -> list[tuple[list[float], float, float, bo
             for w, a, b in zip(s["windows"], s["rmste"]["ppc"], s["rmste"]["mfac"]) if w[0] >= CASE3_FROM_S]
 
 
-def case3_failures(s: Summary) -> list[str]:
-    """Table 2's findings, on a full-length Case 3 (six windows). The factor from 60 s is the
-    guarantee's: where it was lost (an infeasible task), behind_mfac_failures is the criterion; it is
-    checked in the windows where it is measurable (case3_factor_windows)."""
-    mfac = s["rmste"]["mfac"]
-    if len(mfac) < 3:
+def case3_factor_failures(s: Summary) -> list[str]:
+    """Table 2's factor, on a full-length Case 3 (six windows): the guarantee's, so where it was
+    lost (an infeasible task) behind_mfac_failures is the criterion; checked in the windows where
+    it is measurable (case3_factor_windows)."""
+    if len(s["rmste"]["mfac"]) < 3 or s["controllers"]["ppc"]["guarantee_lost_at_s"] is not None:
         return []
-    out: list[str] = []
-    if s["controllers"]["ppc"]["guarantee_lost_at_s"] is None:
-        out += [f"{w[0]:g}-{w[1]:g} s: ahead of MFAC {b / a:.2f} x, not {CASE3_FACTOR:g} x"
-                for w, a, b, measurable in case3_factor_windows(s) if measurable and not CASE3_FACTOR * a < b]
-    if not (all(b > a for a, b in zip(mfac[1:], mfac[2:])) and mfac[-1] > 5.0 * mfac[0]):
-        out.append("MFAC's error does not grow with the chirp: " + " ".join(f"{v:.4f}" for v in mfac))
-    return out
+    return [f"{w[0]:g}-{w[1]:g} s: ahead of MFAC {b / a:.2f} x, not {CASE3_FACTOR:g} x"
+            for w, a, b, measurable in case3_factor_windows(s) if measurable and not CASE3_FACTOR * a < b]
+
+
+def mfac_growth_failures(s: Summary) -> list[str]:
+    """Table 2's other finding, on a full-length Case 3: MFAC's error grows with the chirp."""
+    mfac = s["rmste"]["mfac"]
+    if len(mfac) < 3 or (all(b > a for a, b in zip(mfac[1:], mfac[2:])) and mfac[-1] > 5.0 * mfac[0]):
+        return []
+    return ["MFAC's error does not grow with the chirp: " + " ".join(f"{v:.4f}" for v in mfac)]
+
+
+def case3_failures(s: Summary) -> list[str]:
+    """Table 2's findings (case3_factor_failures, mfac_growth_failures)."""
+    return case3_factor_failures(s) + mfac_growth_failures(s)
 
 
 def band_entry_failures(s2a: Summary, s2b: Summary, feasible: bool) -> list[str]:
@@ -185,11 +192,27 @@ def band_entry_failures(s2a: Summary, s2b: Summary, feasible: bool) -> list[str]
     return []
 
 
-def run_failures(s: Summary, task: str, feasible: bool) -> list[str]:
+# the single-run criteria by name, in the order run_failures lists them (a matrix counts its misses
+# by these names: tools/hil_matrix.py); band_entry_failures compares two runs and is BAND_ENTRY
+BAND_ENTRY = "Case 2b in the band no later than 2a"
+
+
+def run_failures_by_criterion(s: Summary, task: str, feasible: bool) -> dict[str, list[str]]:
     """Every single-run criterion above for the run of one task (a name of PAPER_CASES, or
-    another task's, which the paper's cases' criteria skip)."""
-    out = fault_failures(s) + guarantee_failures(s, feasible) + band_failures(s) + chatter_failures(s, task)
-    out += behind_mfac_failures(s)
-    if task == "case3":
-        out += case3_failures(s)
-    return out
+    another task's, which the paper's cases' criteria skip), by name: each criterion's failures,
+    an empty list where it holds."""
+    case3 = task == "case3"
+    return {
+        "no fault": fault_failures(s),
+        "the guarantee, or its loss flagged and acted on": guarantee_failures(s, feasible),
+        "the band never left": band_failures(s),
+        "no chatter": chatter_failures(s, task),
+        "at most MFAC's RMSTE in every window": behind_mfac_failures(s),
+        "Case 3: 2x ahead of MFAC from 60 s": case3_factor_failures(s) if case3 else [],
+        "Case 3: MFAC's error growing with the chirp": mfac_growth_failures(s) if case3 else [],
+    }
+
+
+def run_failures(s: Summary, task: str, feasible: bool) -> list[str]:
+    """run_failures_by_criterion's failures in one list (empty: the run meets every criterion)."""
+    return [f for failures in run_failures_by_criterion(s, task, feasible).values() for f in failures]

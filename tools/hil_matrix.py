@@ -388,33 +388,45 @@ def plot(jobs: list[tuple[str, str, list[str]]], summaries: list[dict[str, Any]]
     plt.close(fig)
 
 
-def acceptance_failures(jobs: list[tuple[str, str, list[str]]], summaries: list[dict[str, Any]]) -> list[list[str]]:
-    """Each run's failed acceptance criteria (hil/acceptance.py); a Case 2b run also carries
-    the band-entry check against its rig's Case 2a."""
-    failures, feasible = [], []
+def acceptance_failures(jobs: list[tuple[str, str, list[str]]],
+                        summaries: list[dict[str, Any]]) -> list[dict[str, list[str]]]:
+    """Each run's acceptance criteria (hil/acceptance.py) with their failures, by name; a Case 2b
+    run also carries the band-entry check against its rig's Case 2a (acceptance.BAND_ENTRY)."""
+    failures: list[dict[str, list[str]]] = []
+    feasible: list[bool] = []
     for (_, task, _), s in zip(jobs, summaries):
         feasible.append(acceptance.summary_feasible(s))
         # a quick Case 3 ("case3 (quick)", the chirp's slow start) is not the paper's case: its
         # chatter ratio has next to no needed motion to divide by, and it has no windows from 60 s
-        failures.append(acceptance.run_failures(s, task, feasible[-1]))
+        failures.append(acceptance.run_failures_by_criterion(s, task, feasible[-1]))
     by_rig: dict[str, dict[str, int]] = {}
     for i, (label, task, _) in enumerate(jobs):
         by_rig.setdefault(label, {})[task] = i
     for tasks in by_rig.values():
         if "case2a" in tasks and "case2b" in tasks:
             a, b = tasks["case2a"], tasks["case2b"]
-            failures[b] += acceptance.band_entry_failures(summaries[a], summaries[b], feasible[a] and feasible[b])
+            failures[b][acceptance.BAND_ENTRY] = acceptance.band_entry_failures(
+                summaries[a], summaries[b], feasible[a] and feasible[b])
     return failures
 
 
 def print_acceptance(jobs: list[tuple[str, str, list[str]]], summaries: list[dict[str, Any]]) -> None:
+    """The runs that miss a criterion, with the failures in words, then how many runs miss each
+    criterion (a run can miss several)."""
     failures = acceptance_failures(jobs, summaries)
-    met = sum(not f for f in failures)
+    flat = [[f for fs in by_name.values() for f in fs] for by_name in failures]
+    met = sum(not f for f in flat)
     print(f"{met} of {len(jobs)} runs meet every acceptance criterion (hil/acceptance.py)"
           + ("; the others:" if met < len(jobs) else ""))
-    for (label, task, _), f in zip(jobs, failures):
+    for (label, task, _), f in zip(jobs, flat):
         if f:
             print(f"- {label.split(':')[0]} {task}: " + "; ".join(f))
+    missed: dict[str, int] = {}
+    for by_name in failures:
+        for name, fs in by_name.items():
+            missed[name] = missed.get(name, 0) + bool(fs)
+    if met < len(jobs):
+        print("\nruns missing each criterion: " + "; ".join(f"{name} {n}" for name, n in missed.items() if n))
 
 
 if __name__ == "__main__":
