@@ -12,7 +12,9 @@ same rig).
 - where the task is feasible on the rig (the reference within the measured stroke, w1 / 2 of
   slack), its guarantee holds: |e| < w1 after t_u, no barrier clamp after t_u, no funnel widened,
   no hand-over; where it is lost, the firmware flagged it and reacted (a widened funnel or MFAC
-  in charge, never before the lost tick): docs/controllers.md, "When the guarantee is lost";
+  in charge, never before the lost tick): docs/controllers.md, "When the guarantee is lost". A
+  loss with the input held at its limit for longer than the loop's lag is the rig's, feasible
+  stroke or not, with nothing left to react with (lost_at_the_input_limit);
 - the band is never left (no sample at or beyond a position constraint);
 - the paper's cases do not chatter: the pressure command's total variation under CHATTER_MAX
   times what the reference needs on that rig (chatter_ratio_hysteretic: a muscle with friction
@@ -21,10 +23,10 @@ same rig).
   hysteresis a loop that moved the valve exactly as needed scores 3.0 on that one);
 - the paper's controller tracks at least as well as MFAC: RMSTE at most MFAC's in every window,
   level within 0.1 % (MFAC_SLACK: two lanes held at the same input limit);
-- Case 3 (the paper's Table 2): where the guarantee held, the paper's controller at least
-  CASE3_FACTOR times better than MFAC in every window from CASE3_FROM_S where a factor is
-  measurable above the sensor's floor (case3_factor_windows), and MFAC's error growing
-  with the chirp (every window from 30 s worse than the one before, the last over 5 times the
+- Case 3 (the paper's Table 2): on a feasible task, while the guarantee held, the paper's controller at least
+  CASE3_FACTOR times better than MFAC in every window from CASE3_FROM_S (those that end before a
+  loss) where a factor is measurable above the sensor's floor (case3_factor_windows), and
+  MFAC's error growing with the chirp (every window from 30 s worse than the one before, the last over 5 times the
   first);
 - Case 2b (t_u 2 s) enters the band no later than Case 2a (t_u 6 s), each by its t_u, where both
   are feasible.
@@ -85,11 +87,29 @@ def fault_failures(s: Summary) -> list[str]:
     return [] if (state, fault) == ("RUNNING", "NONE") else [f"ends {state} / {fault}"]
 
 
+def lost_at_the_input_limit(s: Summary) -> bool:
+    """The paper's controller lost its guarantee with its output held at one of its limits for
+    longer than the loop's lag (tau + theta_eff, the commissioning's figures: the loop had pushed
+    all it could): the task asked more than the input range gives there, out of reach at that
+    speed or against that load, whatever the static stroke says. Held on one limit: a loop that
+    swings from limit to limit does not count."""
+    held = s["controllers"]["ppc"].get("input_at_limit_before_loss_s")
+    figures = (s.get("commissioning") or {}).get("derivation", {}).get("figures", {})
+    if held is None or "tau_s" not in figures:
+        return False
+    return bool(held >= float(figures["tau_s"]) + float(figures["theta_eff_s"]))
+
+
 def guarantee_failures(s: Summary, feasible: bool) -> list[str]:
+    """The guarantee where the task is feasible, or its loss flagged and acted on. A loss at the
+    input's limit (lost_at_the_input_limit) is the rig's: not counted against a feasible task, and
+    nothing more to act with (a widened funnel or MFAC would sit at the same limit: the firmware's
+    own rule, docs/controllers.md "When the guarantee is lost")."""
     c = s["controllers"]["ppc"]
     lost = c["guarantee_lost_at_s"]
     out: list[str] = []
-    if feasible and lost is not None:
+    at_limit = lost is not None and lost_at_the_input_limit(s)
+    if feasible and lost is not None and not at_limit:
         out.append(f"guarantee lost at {lost:.2f} s on a feasible task")
     if lost is None:
         if c["samples_outside_w1_after_tu"]:
@@ -101,7 +121,7 @@ def guarantee_failures(s: Summary, feasible: bool) -> list[str]:
     else:
         if c["fallback_at_s"] is not None and c["fallback_at_s"] < lost:
             out.append(f"MFAC in charge at {c['fallback_at_s']:.2f} s, before the loss at {lost:.2f} s")
-        if c["funnel_wide_at_s"] is None and c["fallback_at_s"] is None:
+        if c["funnel_wide_at_s"] is None and c["fallback_at_s"] is None and not at_limit:
             out.append(f"guarantee lost at {lost:.2f} s and nothing reacted")
     return out
 
@@ -155,14 +175,17 @@ def case3_factor_windows(s: Summary) -> list[tuple[list[float], float, float, bo
             for w, a, b in zip(s["windows"], s["rmste"]["ppc"], s["rmste"]["mfac"]) if w[0] >= CASE3_FROM_S]
 
 
-def case3_factor_failures(s: Summary) -> list[str]:
-    """Table 2's factor, on a full-length Case 3 (six windows): the guarantee's, so where it was
-    lost (an infeasible task) behind_mfac_failures is the criterion; checked in the windows where
-    it is measurable (case3_factor_windows)."""
-    if len(s["rmste"]["mfac"]) < 3 or s["controllers"]["ppc"]["guarantee_lost_at_s"] is not None:
+def case3_factor_failures(s: Summary, feasible: bool = True) -> list[str]:
+    """Table 2's factor, on a full-length Case 3 (six windows): the guarantee's, so on a task
+    beyond the measured stroke, and from where the guarantee was lost, behind_mfac_failures is the
+    criterion; checked in the windows that end before a loss, where it is measurable
+    (case3_factor_windows)."""
+    lost = s["controllers"]["ppc"]["guarantee_lost_at_s"]
+    if len(s["rmste"]["mfac"]) < 3 or not feasible:
         return []
     return [f"{w[0]:g}-{w[1]:g} s: ahead of MFAC {b / a:.2f} x, not {CASE3_FACTOR:g} x"
-            for w, a, b, measurable in case3_factor_windows(s) if measurable and not CASE3_FACTOR * a < b]
+            for w, a, b, measurable in case3_factor_windows(s)
+            if measurable and not CASE3_FACTOR * a < b and (lost is None or w[1] <= lost)]
 
 
 def mfac_growth_failures(s: Summary) -> list[str]:
@@ -173,9 +196,9 @@ def mfac_growth_failures(s: Summary) -> list[str]:
     return ["MFAC's error does not grow with the chirp: " + " ".join(f"{v:.4f}" for v in mfac)]
 
 
-def case3_failures(s: Summary) -> list[str]:
+def case3_failures(s: Summary, feasible: bool = True) -> list[str]:
     """Table 2's findings (case3_factor_failures, mfac_growth_failures)."""
-    return case3_factor_failures(s) + mfac_growth_failures(s)
+    return case3_factor_failures(s, feasible) + mfac_growth_failures(s)
 
 
 def band_entry_failures(s2a: Summary, s2b: Summary, feasible: bool) -> list[str]:
@@ -208,7 +231,7 @@ def run_failures_by_criterion(s: Summary, task: str, feasible: bool) -> dict[str
         "the band never left": band_failures(s),
         "no chatter": chatter_failures(s, task),
         "at most MFAC's RMSTE in every window": behind_mfac_failures(s),
-        "Case 3: 2x ahead of MFAC from 60 s": case3_factor_failures(s) if case3 else [],
+        "Case 3: 2x ahead of MFAC from 60 s": case3_factor_failures(s, feasible) if case3 else [],
         "Case 3: MFAC's error growing with the chirp": mfac_growth_failures(s) if case3 else [],
     }
 

@@ -184,6 +184,7 @@ def summarise(sc: Scenario, lanes: list[LaneResult], *, quick: bool, duration_s:
         # the PPC's guarantee monitor, from TELEM_E's CtrlFlags (docs/controllers.md)
         info["guarantee_lost_at_s"] = first_flag_time(telem, CTRL_FLAG_GUARANTEE_LOST)
         info["fallback_at_s"] = first_flag_time(telem, CTRL_FLAG_FALLBACK)
+        info["input_at_limit_before_loss_s"] = held_at_limit_before(telem, CTRL_FLAG_GUARANTEE_LOST)
         # ppc.fallback WIDEN: the first sample with a funnel wider than assigned (the flag lasts
         # t_u, so the telemetry's decimation cannot miss it as it could the one-tick WIDEN1/2)
         info["funnel_wide_at_s"] = (first_flag_time(telem, PPC_FLAG_WIDE)
@@ -213,6 +214,9 @@ CTRL_FLAG_GUARANTEE_LOST = 0x4000
 CTRL_FLAG_FALLBACK = 0x8000
 # the paper's law's own flag for a widened funnel (PMA_PPC_FLAG_WIDE in pma/ppc.h)
 PPC_FLAG_WIDE = 0x0100
+# the law's output at ctrl.u_max / ctrl.u_min (PMA_PPC_FLAG_SAT_HIGH / SAT_LOW in pma/ppc.h)
+PPC_FLAG_SAT_HIGH = 0x0004
+PPC_FLAG_SAT_LOW = 0x0008
 
 
 def first_flag_time(telem: dict[str, np.ndarray], bit: int) -> float | None:
@@ -221,6 +225,25 @@ def first_flag_time(telem: dict[str, np.ndarray], bit: int) -> float | None:
         return None
     hit = (telem["ctrl_flags"].astype(np.int64) & bit) != 0
     return float(telem["t_s"][np.argmax(hit)]) if hit.any() else None
+
+
+def held_at_limit_before(telem: dict[str, np.ndarray], bit: int) -> float | None:
+    """How long [s] the output had been at one of its limits (PPC_FLAG_SAT_HIGH or _LOW, the same
+    one on every telemetry sample) at the first sample with `bit`: 0 where it is not at a limit
+    there (or at both), None where no sample has `bit`. From the telemetry, so to its decimation."""
+    if "t_s" not in telem or "ctrl_flags" not in telem or not len(telem["ctrl_flags"]):
+        return None
+    flags = telem["ctrl_flags"].astype(np.int64)
+    hit = (flags & bit) != 0
+    if not hit.any():
+        return None
+    i = int(np.argmax(hit))
+    sat = int(flags[i]) & (PPC_FLAG_SAT_HIGH | PPC_FLAG_SAT_LOW)
+    if sat not in (PPC_FLAG_SAT_HIGH, PPC_FLAG_SAT_LOW):
+        return 0.0
+    other = (flags[: i + 1] & (PPC_FLAG_SAT_HIGH | PPC_FLAG_SAT_LOW)) != sat
+    first = int(np.nonzero(other)[0][-1]) + 1 if other.any() else 0
+    return float(telem["t_s"][i] - telem["t_s"][first])
 
 
 def reference_check(telem: dict[str, np.ndarray], steps: np.ndarray, xr_fn: Callable[[np.ndarray], np.ndarray],

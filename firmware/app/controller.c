@@ -120,7 +120,7 @@ void pma_ctrl_monitor_lost(pma_ctrl_t *s, float t_s, uint32_t law_flags)
     const uint8_t sat = (uint8_t)(law_flags & PMA_CTRL_SAT_FLAGS);
     if (!s->lost) s->lost_at_s = t_s;
     s->lost = 1;
-    if (s->lost_ticks != UINT32_MAX) ++s->lost_ticks;
+    pma_ctrl_count_lost(s);
     int hand_over = s->fallback_mode == PMA_PPC_FALLBACK_MFAC;
     if (s->fallback_mode == PMA_PPC_FALLBACK_WIDEN) {
         /* WIDEN: one widening of the position funnel is a transient the law recovers from; a

@@ -129,10 +129,10 @@ typedef struct pma_ctrl_setup {
 /* The arithmetic's part of START: the instances from su (s's fields from the parameters
  * are set); PMA_ERR_FIXED_RANGE when a value does not fit Q16.16. */
 int pma_ctrl_init_arith(pma_ctrl_t *s, const pma_ctrl_setup_t *su);
-/* The PPC's guarantee monitor for one step, in either arithmetic (see below): outside_w1 is
- * t >= t_u and |e| >= w1, law_flags the law's PMA_PPC_FLAG_* of this step (a barrier clamp, a
- * widening). pma_ctrl_monitor counts the clamp run and returns nonzero where this step lost the
- * guarantee; then pma_ctrl_monitor_lost, with the step's time t_s [s] (taken only then: the
+/* The PPC's guarantee monitor for one step, in either arithmetic (see below): after_tu is
+ * t >= t_u, outside_w1 after_tu and |e| >= w1, law_flags the law's PMA_PPC_FLAG_* of this step
+ * (a barrier clamp, a widening, the output at a limit). pma_ctrl_monitor counts the clamp run
+ * and returns nonzero where this step lost the guarantee; then pma_ctrl_monitor_lost, with the step's time t_s [s] (taken only then: the
  * Q16.16 slot converts it to float only for it), counts the lost ticks, latches `lost` with
  * `lost_at_s` and, with the MFAC fallback, hands over. The monitor is inline (every step),
  * pma_ctrl_monitor_lost (controller.c) runs only on a lost tick. */
@@ -141,15 +141,36 @@ static inline int pma_ctrl_clamp_run(const pma_ctrl_t *s)
     /* the law's clamp has lasted ctrl.barrier_ticks steps (0: never counts) */
     return s->barrier_ticks != 0 && s->barrier_run >= s->barrier_ticks;
 }
-static inline int pma_ctrl_monitor(pma_ctrl_t *s, int outside_w1, uint32_t law_flags)
+static inline int pma_ctrl_monitor(pma_ctrl_t *s, int after_tu, int outside_w1, uint32_t law_flags)
 {
-    const uint8_t barrier = (law_flags & (PMA_PPC_FLAG_BARRIER1 | PMA_PPC_FLAG_BARRIER2)) != 0;
     const int widened = (law_flags & (PMA_PPC_FLAG_WIDEN1 | PMA_PPC_FLAG_WIDEN2)) != 0;
-    s->barrier_run = barrier ? s->barrier_run + 1u : 0u;
     s->widen1_held &= (uint8_t)(law_flags & PMA_CTRL_SAT_FLAGS);
+    if (!(law_flags & (PMA_PPC_FLAG_BARRIER1 | PMA_PPC_FLAG_BARRIER2))) {
+        s->barrier_run = 0u;
+        return outside_w1 || widened;
+    }
+    ++s->barrier_run;
+    /* after t_u a clamp with the output at its limit, however short: the law has no input left
+     * to hold its funnel with (the task asks more than the input range gives there) */
+    if (after_tu && (law_flags & PMA_CTRL_SAT_FLAGS)) return 1;
     return outside_w1 || pma_ctrl_clamp_run(s) || widened;
 }
 void pma_ctrl_monitor_lost(pma_ctrl_t *s, float t_s, uint32_t law_flags);
+/* Every lost tick counts (saturating at 2^32-1). */
+static inline void pma_ctrl_count_lost(pma_ctrl_t *s)
+{
+    if (s->lost_ticks != UINT32_MAX) ++s->lost_ticks;
+}
+/* A lost tick on which pma_ctrl_monitor_lost would only count: the guarantee already lost, no
+ * widening of the position funnel since START nor on this tick, no clamp run, MFAC not to take
+ * over. Then the caller counts it (pma_ctrl_count_lost) and the Q16.16 slot need not convert
+ * the time to float for pma_ctrl_monitor_lost (a law living at its barrier with its output at a
+ * limit loses every tick after t_u). */
+static inline int pma_ctrl_lost_again(const pma_ctrl_t *s, uint32_t law_flags)
+{
+    return s->lost && s->widen1_count == 0u && !(law_flags & PMA_PPC_FLAG_WIDEN1) &&
+           !pma_ctrl_clamp_run(s) && (s->fallback_mode != PMA_PPC_FALLBACK_MFAC || s->fallback_active);
+}
 /* The arithmetic's part of pma_ctrl_stream, after the band check. */
 int pma_ctrl_stream_arith(pma_ctrl_t *s, float target_cm);
 
@@ -215,9 +236,11 @@ static inline int pma_ctrl_output_in_q16(const pma_ctrl_t *s)
 
 /* The PPC's guarantee monitor (mode PPC; t the control time since START, e = x - x_r with
  * the raw sample): a tick with t >= t_u and |e| >= w1, a tick on which the law widened a
- * funnel (ppc.fallback WIDEN: flags WIDEN1/2), or (at any t) the last of
- * safety.barrier_ticks consecutive ticks with a barrier clamp of the law (the run that faults
- * BARRIER with ppc.fallback NONE) and every clamped tick after it, is a lost tick. The first
+ * funnel (ppc.fallback WIDEN: flags WIDEN1/2), a tick with t >= t_u on which the law's
+ * barrier clamp came with its output at ctrl.u_min or u_max (SAT_LOW / SAT_HIGH), or (at any
+ * t) the last of safety.barrier_ticks consecutive ticks with a barrier clamp of the law (the
+ * run that faults BARRIER with ppc.fallback NONE) and every clamped tick after it, is a lost
+ * tick. The first
  * one latches `lost` and records `lost_at_s`; every one counts in `lost_ticks`.
  * The hand-over to MFAC (`shadow`, the mfac.* gains; the law is not stepped again until
  * STOP) starts MFAC as it would start on its own at that point of the reference: from the

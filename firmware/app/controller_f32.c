@@ -122,7 +122,8 @@ int pma_ctrl_step(pma_ctrl_t *s, float t_s, float x_cm, float openloop_u, float 
             o->barrier = (uint8_t)((o->flags & (PMA_PPC_FLAG_BARRIER1 | PMA_PPC_FLAG_BARRIER2)) != 0);
         }
         const uint8_t was_fallback = s->fallback_active;
-        if (pma_ctrl_monitor(s, t_s >= s->t_u_s && fabsf(o->e_cm) >= s->w1_cm, o->flags)) {
+        const int after_tu = t_s >= s->t_u_s;
+        if (pma_ctrl_monitor(s, after_tu, after_tu && fabsf(o->e_cm) >= s->w1_cm, o->flags)) {
             pma_ctrl_monitor_lost(s, t_s, o->flags);
         }
         /* MFAC takes over as it would start on its own at this point of the reference: from

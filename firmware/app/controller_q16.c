@@ -217,8 +217,13 @@ int pma_ctrl_step_q16(pma_ctrl_t *s, pma_q16_t t, pma_q16_t x, float openloop_u,
             barrier = (uint8_t)((flags & (PMA_PPC_FLAG_BARRIER1 | PMA_PPC_FLAG_BARRIER2)) != 0);
         }
         const uint8_t was_fallback = s->fallback_active;
-        if (pma_ctrl_monitor(s, t >= s->q_t_u_s && q16_abs(o->e_cm) >= s->q_w1_cm, flags)) {
-            pma_ctrl_monitor_lost(s, pma_q16_to_f32(t), flags);
+        const int after_tu = t >= s->q_t_u_s;
+        if (pma_ctrl_monitor(s, after_tu, after_tu && q16_abs(o->e_cm) >= s->q_w1_cm, flags)) {
+            if (pma_ctrl_lost_again(s, flags)) {
+                pma_ctrl_count_lost(s);   /* all it would do: no float time needed */
+            } else {
+                pma_ctrl_monitor_lost(s, pma_q16_to_f32(t), flags);
+            }
         }
         if (s->fallback_active && !was_fallback) {   /* as controller_f32.c */
             STEP_CHECK(pma_mfac_take_over_q16(&s->shadow, pma_q16_sadd(s->c.ppc.ff_init, u_ref)));

@@ -152,3 +152,45 @@ def test_the_factor_is_asked_only_above_the_sensors_floor():
     assert acceptance.behind_mfac_failures(s) == []                            # still ahead of MFAC there
     s["rmste"]["ppc"][2] = 0.0063
     assert acceptance.behind_mfac_failures(s)
+
+
+def test_a_loss_with_the_input_held_at_its_limit_is_the_rigs():
+    """Lost, flagged, nothing widened or handed over, on a task within the static stroke: a
+    failure, unless the output had been held at one limit for longer than the loop's lag (tau +
+    theta_eff): the task then asks more than the input range gives, and a widened funnel or MFAC
+    would sit at the same limit."""
+    s = good_case3()
+    s["commissioning"]["derivation"]["figures"].update(tau_s=0.15, theta_eff_s=0.08)
+    c = s["controllers"]["ppc"]
+    c.update(guarantee_lost_at_s=7.7, barrier_breaches_after_tu=7, input_at_limit_before_loss_s=1.2)
+    assert acceptance.lost_at_the_input_limit(s)
+    assert acceptance.guarantee_failures(s, True) == []
+    c["input_at_limit_before_loss_s"] = 0.2                  # shorter than the loop's lag
+    assert not acceptance.lost_at_the_input_limit(s)
+    failures = acceptance.guarantee_failures(s, True)
+    assert any("on a feasible task" in f for f in failures) and any("nothing reacted" in f for f in failures)
+    c["input_at_limit_before_loss_s"] = 0.0                  # off the limits
+    assert not acceptance.lost_at_the_input_limit(s)
+    del s["commissioning"]                                   # no loop's lag to weigh it with
+    c["input_at_limit_before_loss_s"] = 5.0
+    assert not acceptance.lost_at_the_input_limit(s)
+
+
+def test_the_factor_is_checked_in_the_windows_before_a_loss():
+    """A loss late in Case 3 leaves the factor asked of the windows that ended before it."""
+    s = good_case3()
+    s["rmste"]["ppc"][2] = 0.006                              # 60-90 s: 1.67x
+    s["controllers"]["ppc"].update(guarantee_lost_at_s=175.0, funnel_wide_at_s=175.0)
+    assert any("60-90 s: ahead of MFAC 1.67 x" in f for f in acceptance.case3_factor_failures(s))
+    s["controllers"]["ppc"]["guarantee_lost_at_s"] = 80.0     # lost inside that window
+    assert acceptance.case3_factor_failures(s) == []
+
+
+def test_the_factor_is_not_asked_of_a_task_beyond_the_stroke():
+    """Beyond the measured stroke the guarantee cannot hold, and at most MFAC's RMSTE is the
+    criterion (behind_mfac_failures), not Table 2's factor."""
+    s = good_case3()
+    s["rmste"]["ppc"][2] = 0.006                              # 60-90 s: 1.67x
+    assert acceptance.case3_factor_failures(s, True)
+    assert acceptance.case3_factor_failures(s, False) == []
+    assert acceptance.run_failures(s, "case3", False) == []

@@ -7,6 +7,7 @@ import re
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from hil import summary
 
@@ -23,9 +24,12 @@ def test_flag_bits_are_the_firmwares():
                      "FALLBACK": summary.CTRL_FLAG_FALLBACK}
 
 
-def test_wide_flag_is_the_laws():
-    m = re.search(r"#define PMA_PPC_FLAG_WIDE\s+0x([0-9A-Fa-f]+)u", PPC_HEADER.read_text())
-    assert m is not None and int(m.group(1), 16) == summary.PPC_FLAG_WIDE
+def test_the_laws_flags_are_the_laws():
+    text = PPC_HEADER.read_text()
+    for name, value in (("WIDE", summary.PPC_FLAG_WIDE), ("SAT_HIGH", summary.PPC_FLAG_SAT_HIGH),
+                        ("SAT_LOW", summary.PPC_FLAG_SAT_LOW)):
+        m = re.search(rf"#define PMA_PPC_FLAG_{name}\s+0x([0-9A-Fa-f]+)u", text)
+        assert m is not None and int(m.group(1), 16) == value, name
 
 
 def test_first_flag_time():
@@ -35,3 +39,19 @@ def test_first_flag_time():
     assert summary.first_flag_time(telem, summary.CTRL_FLAG_FALLBACK) == 0.02
     assert summary.first_flag_time(telem, 0x0100) is None
     assert summary.first_flag_time({"t_s": np.array([])}, summary.CTRL_FLAG_FALLBACK) is None
+
+
+def test_held_at_limit_before_the_loss():
+    """The time the output had been at one limit at the first lost sample: from the last sample
+    at another limit or none; 0 off the limits or where they alternate on that sample."""
+    lost, hi, lo = summary.CTRL_FLAG_GUARANTEE_LOST, summary.PPC_FLAG_SAT_HIGH, summary.PPC_FLAG_SAT_LOW
+    t = np.arange(6) * 0.01
+
+    def held(*flags: int) -> float | None:
+        return summary.held_at_limit_before({"t_s": t[:len(flags)], "ctrl_flags": np.array(flags, dtype=float)}, lost)
+    assert held(0, lo, lo, lo, lost | lo, lost | lo) == pytest.approx(0.03)
+    assert held(lo, lo, hi, hi, lost | hi) == pytest.approx(0.02)       # from the swing to the other one
+    assert held(lo, lo, lo, 0x01, lost | lo) == pytest.approx(0.0)      # off the limit the sample before
+    assert held(lo, lo, lost, lost) == 0.0                               # off the limits at the loss
+    assert held(lo, lo, lo) is None                                      # never lost
+    assert held(lost | hi | lo) == 0.0

@@ -460,6 +460,56 @@ static void test_one_limit_or_a_late_swing_keeps_the_law(void)
     TEST_ASSERT_FALSE(HANDS_OVER(0u, {0.0f, W1 | HI}, {0.1f, LO}));
 }
 
+/* The monitor's lost ticks from a barrier clamp (pma_ctrl_monitor, driven with the law's flags):
+ * after t_u a clamp with the output at either limit is lost at once, however short; a clamp off
+ * the limits, a clamp at a limit before t_u (the start's transient) and a limit without a clamp
+ * are not (a clamp run of safety.barrier_ticks is: test_app_faults.c). */
+static void test_a_clamp_at_the_input_limit_after_t_u_is_lost(void)
+{
+    pma_params_defaults(&par);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ctrl_start(&ctl_on, &par, PERIOD_S));
+    const uint32_t b1 = PMA_PPC_FLAG_BARRIER1, b2 = PMA_PPC_FLAG_BARRIER2;
+    TEST_ASSERT_TRUE(pma_ctrl_monitor(&ctl_on, 1, 0, b2 | PMA_PPC_FLAG_SAT_LOW));
+    TEST_ASSERT_TRUE(pma_ctrl_monitor(&ctl_on, 1, 0, b1 | PMA_PPC_FLAG_SAT_HIGH));
+    TEST_ASSERT_FALSE(pma_ctrl_monitor(&ctl_on, 1, 0, b2));
+    TEST_ASSERT_FALSE(pma_ctrl_monitor(&ctl_on, 0, 0, b2 | PMA_PPC_FLAG_SAT_LOW));
+    TEST_ASSERT_FALSE(pma_ctrl_monitor(&ctl_on, 1, 0, PMA_PPC_FLAG_SAT_HIGH));
+    TEST_ASSERT_TRUE(pma_ctrl_monitor(&ctl_on, 1, 1, 0u));   /* |e| >= w1 after t_u, as before */
+    TEST_ASSERT_EQUAL_UINT32(0u, ctl_on.barrier_run);        /* the last tick had no clamp */
+    /* the clamp at the limit counts in the clamp run like any other */
+    TEST_ASSERT_TRUE(pma_ctrl_monitor(&ctl_on, 1, 0, b2 | PMA_PPC_FLAG_SAT_LOW));
+    TEST_ASSERT_EQUAL_UINT32(1u, ctl_on.barrier_run);
+}
+
+/* pma_ctrl_lost_again: the lost ticks on which pma_ctrl_monitor_lost would only count (the
+ * Q16.16 slot then skips it and its float time): after the first loss, with no widening of the
+ * position funnel since START, none on the tick, no clamp run, and MFAC already in charge where
+ * ppc.fallback is MFAC. */
+static void test_a_lost_tick_that_only_counts(void)
+{
+    pma_params_defaults(&par);
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ctrl_start(&ctl_on, &par, PERIOD_S));
+    TEST_ASSERT_FALSE(pma_ctrl_lost_again(&ctl_on, 0u));                  /* not lost yet */
+    pma_ctrl_monitor_lost(&ctl_on, T0_S, PMA_PPC_FLAG_SAT_LOW);
+    TEST_ASSERT_TRUE(pma_ctrl_lost_again(&ctl_on, PMA_PPC_FLAG_SAT_LOW));
+    TEST_ASSERT_FALSE(pma_ctrl_lost_again(&ctl_on, W1));                  /* a widening: its rules */
+    const uint32_t ticks = ctl_on.lost_ticks;
+    pma_ctrl_count_lost(&ctl_on);
+    TEST_ASSERT_EQUAL_UINT32(ticks + 1u, ctl_on.lost_ticks);
+    ctl_on.barrier_run = ctl_on.barrier_ticks;                            /* a clamp run: hands over */
+    TEST_ASSERT_FALSE(pma_ctrl_lost_again(&ctl_on, 0u));
+    ctl_on.barrier_run = 0u;
+    pma_ctrl_monitor_lost(&ctl_on, T0_S + 0.1f, W1 | PMA_PPC_FLAG_SAT_LOW);
+    TEST_ASSERT_FALSE(pma_ctrl_lost_again(&ctl_on, 0u));                  /* after a widening: its rules */
+    par.ppc_fallback = PMA_PPC_FALLBACK_MFAC;
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ctrl_start(&ctl_on, &par, PERIOD_S));
+    pma_ctrl_monitor_lost(&ctl_on, T0_S, 0u);                             /* MFAC takes over */
+    TEST_ASSERT_TRUE(ctl_on.fallback_active && pma_ctrl_lost_again(&ctl_on, 0u));
+    ctl_on.lost_ticks = UINT32_MAX;                                       /* saturates, never wraps */
+    pma_ctrl_count_lost(&ctl_on);
+    TEST_ASSERT_EQUAL_UINT32(UINT32_MAX, ctl_on.lost_ticks);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -474,5 +524,7 @@ int main(void)
     RUN_TEST(test_time_beyond_the_fixed_point_range);
     RUN_TEST(test_swing_limit_to_limit_after_a_widening_hands_over);
     RUN_TEST(test_one_limit_or_a_late_swing_keeps_the_law);
+    RUN_TEST(test_a_clamp_at_the_input_limit_after_t_u_is_lost);
+    RUN_TEST(test_a_lost_tick_that_only_counts);
     return UNITY_END();
 }

@@ -12,7 +12,10 @@
  * controller works in its linear region and takes its general path on every
  * tick (a sample that never changes would let the law's input settle, and
  * MFAC's estimator, which PPC runs beside its law, skip its divisions);
- * nothing saturates or faults; the host heartbeat check is off (no host here). Each figure is (N ticks - N passes of
+ * nothing faults; the host heartbeat check is off (no host here). With t >= t_u the paper's
+ * law on its default gains sits at its velocity barrier with its output at ctrl.u_max
+ * (CtrlFlags 0x4006): every tick there is a lost tick of the guarantee monitor, which it
+ * only counts (pma_ctrl_lost_again). Each figure is (N ticks - N passes of
  * the same loop without the tick) / N. The frames a tick queued are popped after it,
  * so the fake CAN's pops (about 40 instructions a tick on the M0) are in the figure;
  * `tools/profile_tick.py` shows the tick per function and per library. */
