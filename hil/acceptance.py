@@ -23,11 +23,11 @@ same rig).
   hysteresis a loop that moved the valve exactly as needed scores 3.0 on that one);
 - the paper's controller tracks at least as well as MFAC: RMSTE at most MFAC's in every window,
   level within 0.1 % (MFAC_SLACK: two lanes held at the same input limit);
-- Case 3 (the paper's Table 2): on a feasible task, while the guarantee held, the paper's controller at least
-  CASE3_FACTOR times better than MFAC in every window from CASE3_FROM_S (those that end before a
-  loss) where a factor is measurable above the sensor's floor (case3_factor_windows), and
-  MFAC's error growing with the chirp (every window from 30 s worse than the one before, the last over 5 times the
-  first);
+- Case 3 (the paper's Table 2): on a feasible task, while the guarantee held, the paper's
+  controller at least CASE3_FACTOR times better than MFAC in every window from CASE3_FROM_S
+  (those that end before a loss) where a factor is measurable above the sensor's floor
+  (case3_factor_windows), and MFAC's error growing with the chirp (every window from 30 s worse
+  than the one before, the last over 5 times the first);
 - Case 2b (t_u 2 s) enters the band no later than Case 2a (t_u 6 s), each by its t_u, where both
   are feasible.
 """
@@ -180,9 +180,9 @@ def case3_factor_failures(s: Summary, feasible: bool = True) -> list[str]:
     beyond the measured stroke, and from where the guarantee was lost, behind_mfac_failures is the
     criterion; checked in the windows that end before a loss, where it is measurable
     (case3_factor_windows)."""
-    lost = s["controllers"]["ppc"]["guarantee_lost_at_s"]
     if len(s["rmste"]["mfac"]) < 3 or not feasible:
         return []
+    lost = s["controllers"]["ppc"]["guarantee_lost_at_s"]
     return [f"{w[0]:g}-{w[1]:g} s: ahead of MFAC {b / a:.2f} x, not {CASE3_FACTOR:g} x"
             for w, a, b, measurable in case3_factor_windows(s)
             if measurable and not CASE3_FACTOR * a < b and (lost is None or w[1] <= lost)]

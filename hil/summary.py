@@ -217,6 +217,7 @@ PPC_FLAG_WIDE = 0x0100
 # the law's output at ctrl.u_max / ctrl.u_min (PMA_PPC_FLAG_SAT_HIGH / SAT_LOW in pma/ppc.h)
 PPC_FLAG_SAT_HIGH = 0x0004
 PPC_FLAG_SAT_LOW = 0x0008
+PPC_FLAGS_SAT = PPC_FLAG_SAT_HIGH | PPC_FLAG_SAT_LOW
 
 
 def first_flag_time(telem: dict[str, np.ndarray], bit: int) -> float | None:
@@ -238,10 +239,10 @@ def held_at_limit_before(telem: dict[str, np.ndarray], bit: int) -> float | None
     if not hit.any():
         return None
     i = int(np.argmax(hit))
-    sat = int(flags[i]) & (PPC_FLAG_SAT_HIGH | PPC_FLAG_SAT_LOW)
+    sat = int(flags[i]) & PPC_FLAGS_SAT
     if sat not in (PPC_FLAG_SAT_HIGH, PPC_FLAG_SAT_LOW):
         return 0.0
-    other = (flags[: i + 1] & (PPC_FLAG_SAT_HIGH | PPC_FLAG_SAT_LOW)) != sat
+    other = (flags[: i + 1] & PPC_FLAGS_SAT) != sat
     first = int(np.nonzero(other)[0][-1]) + 1 if other.any() else 0
     return float(telem["t_s"][i] - telem["t_s"][first])
 

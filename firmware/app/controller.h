@@ -132,9 +132,10 @@ int pma_ctrl_init_arith(pma_ctrl_t *s, const pma_ctrl_setup_t *su);
 /* The PPC's guarantee monitor for one step, in either arithmetic (see below): after_tu is
  * t >= t_u, outside_w1 after_tu and |e| >= w1, law_flags the law's PMA_PPC_FLAG_* of this step
  * (a barrier clamp, a widening, the output at a limit). pma_ctrl_monitor counts the clamp run
- * and returns nonzero where this step lost the guarantee; then pma_ctrl_monitor_lost, with the step's time t_s [s] (taken only then: the
- * Q16.16 slot converts it to float only for it), counts the lost ticks, latches `lost` with
- * `lost_at_s` and, with the MFAC fallback, hands over. The monitor is inline (every step),
+ * and returns nonzero where this step lost the guarantee; then pma_ctrl_monitor_lost, with the
+ * step's time t_s [s] (taken only then: the Q16.16 slot converts it to float only for it),
+ * counts the lost ticks, latches `lost` with `lost_at_s` and, with the MFAC fallback, hands
+ * over. The monitor is inline (every step),
  * pma_ctrl_monitor_lost (controller.c) runs only on a lost tick. */
 static inline int pma_ctrl_clamp_run(const pma_ctrl_t *s)
 {
@@ -240,8 +241,8 @@ static inline int pma_ctrl_output_in_q16(const pma_ctrl_t *s)
  * barrier clamp came with its output at ctrl.u_min or u_max (SAT_LOW / SAT_HIGH), or (at any
  * t) the last of safety.barrier_ticks consecutive ticks with a barrier clamp of the law (the
  * run that faults BARRIER with ppc.fallback NONE) and every clamped tick after it, is a lost
- * tick. The first
- * one latches `lost` and records `lost_at_s`; every one counts in `lost_ticks`.
+ * tick. The first one latches `lost` and records `lost_at_s`; every one counts in
+ * `lost_ticks`.
  * The hand-over to MFAC (`shadow`, the mfac.* gains; the law is not stepped again until
  * STOP) starts MFAC as it would start on its own at that point of the reference: from the
  * holding input there by the static map (ppc.ff_init plus the reference feedforward) and
