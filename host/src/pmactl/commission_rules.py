@@ -50,8 +50,9 @@ PM_MIN_DEG, GM_MIN = 45.0, 2.0
 SPEEDUP_MAX = 5.0            # tau_c >= tau / 5: the closed loop at most 5x faster than the open loop
 # the velocity observer's bandwidth in units of the crossover of the tightest loop the rule allows
 # (TAU_C_PER_THETA_MIN; a looser loop keeps the observer and gains phase): the law's feedforward integrator
-# takes r / (1 + r) (FF_PER_KP) of its proportional action through the observer's velocity, whose lag at the crossover
-# is at most 2 atan(1 / FC_PER_CROSSOVER): 14 deg here, 28 deg at 4x (docs/commissioning.md, "The rules")
+# takes r / (1 + r) (r = FF_PER_KP) of its proportional action through the observer's velocity, whose lag
+# at the crossover is at most 2 atan(1 / FC_PER_CROSSOVER): 14 deg here, 28 deg at 4x (docs/commissioning.md,
+# "The rules")
 FC_PER_CROSSOVER = 8.0
 FC_MIN_HZ, FC_MAX_HZ = 2.0, 50.0
 # the command's low-pass (ppc.u_lpf_hz) in units of the observer's bandwidth: the law passes the
@@ -81,9 +82,8 @@ FC_NOISE_STEP = 0.9
 # the feedforward integrator's gain k_ff in units of K_p: the law's derivative (velocity) term is
 # 1 + r times smaller than Kc / K_p. Its phase lead at the crossover is in the margins as built, so
 # a larger one lets the bisection take a tighter tau_c; its noise is in law_noise_rate (the command's
-# low-pass where it would chatter). 10 against 30, over 1,023 runs on 183 rigs: the PPC's RMSTE
-# 4 % lower (geometric mean of every window), its command's total variation 5 % higher in the median
-# run and 25 % at the 90th percentile (docs/hil.md, "The velocity term's weight")
+# low-pass where it would chatter). 10 rather than 30: a lower RMSTE on the drawn rigs for a little
+# more valve activity (docs/hil.md, "The velocity term's weight")
 FF_PER_KP = 10.0
 W2_PER_A = 5.0               # lambda2's barrier at 5 a: theta = a tan(pi r / 2) reaches it at r = 0.87
 NOISE_SIGMAS_IN_W1 = 6.0     # w1 must hold 6 standard deviations of the position noise
