@@ -72,6 +72,7 @@ int pma_ctrl_start(pma_ctrl_t *s, const pma_params_t *p, float period_s)
         c->soft_barrier_r = p->ppc_soft_barrier_r;
         c->ff_gain_per_s = p->ppc_ff_gain_per_s;
         c->ff_init = p->ppc_ff_init;
+        c->ff_hold_speed_cm_s = p->ppc_ff_hold_speed_cm_s;
         c->period_s = period_s;
         su.u_lpf = (pma_lpf_config_t){.fc_hz = p->ppc_u_lpf_hz, .period_s = period_s};
         s->fallback_mode = (uint8_t)p->ppc_fallback;

@@ -246,6 +246,11 @@ def test_derive_follows_the_rules():
     assert d.margins["phase_margin_deg"] > 45.0 and d.margins["gain_margin"] > 2.0   # the PID's: more
     # the steady-state input at the start position, for the feedforward and MFAC
     assert p["ppc.ff_init"] == p["mfac.u_init"]
+    # the integrator waits above the speed from which the loop stops within w1 / 2: the speed the
+    # report promises w1 for
+    v_max = TASK.w1_cm / (2.0 * (tau_c + f["theta_eff_s"]))
+    assert p["ppc.ff_hold_speed_cm_s"] == pytest.approx(v_max, abs=1e-4)
+    assert f["v_max_cm_s"] == pytest.approx(v_max, rel=1e-9)
     # the synthetic map reaches -2.4 cm: the band's bottom is out of reach, and said so
     assert len(d.warnings) == 1 and "measured stroke" in d.warnings[0]
 

@@ -48,6 +48,10 @@ static float observer_x_cm(const pma_ctrl_t *c)
 {
     return (float)((double)c->vel.xh_q32 / 4294967296.0);
 }
+static float law_u(const pma_ctrl_t *c)
+{
+    return pma_q16_to_f32(c->c.ppc.out.u_law);
+}
 #else
 #define TOL_PASS 0.0f
 #define TOL_LAW 1e-6f
@@ -59,6 +63,10 @@ static law_view_t law(const pma_ctrl_t *c)
 static float observer_x_cm(const pma_ctrl_t *c)
 {
     return c->vel.xh;
+}
+static float law_u(const pma_ctrl_t *c)
+{
+    return c->c.ppc.out.u_law;
 }
 #endif
 
@@ -390,6 +398,61 @@ static void test_u_lpf_filters_the_laws_command(void)
     TEST_ASSERT_EQUAL_INT(PMA_ERR_RANGE, pma_ctrl_start(&ctl_on, &par, PERIOD_S));
 }
 
+/* ppc.ff_hold_speed_cm_s reaches the law: two slots with the feedforward integrator on, one with
+ * the hold at 0.5 cm/s, on a muscle driven from 1 cm above a held reference down onto it at
+ * 1 cm/s. Both laws see the same samples, so their outputs differ by their integrators only: the
+ * slot that holds has FF_HOLD set while the observer reads the muscle closing faster than 0.5
+ * cm/s and its integrator has not moved when the muscle arrives; the other's has. Standing on the
+ * reference, neither holds. A negative hold speed is refused at START. */
+static void test_ff_hold_waits_while_the_muscle_closes(void)
+{
+    pma_params_defaults(&par);
+    par.ctrl_mode = PMA_CTRL_MODE_PPC;
+    par.ref_kind = PMA_REF_KIND_HOLD;
+    par.ref_offset_cm = OFFSET_CM;
+    par.vel_kind = 1;              /* the tracking observer */
+    par.vel_fc_hz = 20.0f;
+    par.ppc_ref_vel = 1;
+    par.ppc_fallback = 0;
+    par.ppc_t_u_s = 0.5f;
+    par.ppc_w1_cm = 1.2f;          /* the funnels wide enough for the whole approach */
+    par.ppc_w2_cm_s = 5.0f;
+    par.ppc_c = 200.0f;
+    par.ppc_ff_gain_per_s = 20.0f;
+    par.ppc_ff_init = 0.0f;
+    par.ctrl_u_min = -5000.0f;
+    par.ctrl_u_max = 5000.0f;
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ctrl_start(&ctl_off, &par, PERIOD_S));
+    par.ppc_ff_hold_speed_cm_s = 0.5f;
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ctrl_start(&ctl_on, &par, PERIOD_S));
+    int held = 0, held_off = 0, held_standing = 0;
+    float u_off = 0.0f, u_on = 0.0f;
+    for (int k = 0; k < 1500; ++k) {
+        const float t_s = (float)k * PERIOD_S;
+        const float x = OFFSET_CM + (t_s < 1.0f ? 1.0f - t_s : 0.0f);
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ctrl_step(&ctl_off, t_s, x, 0.0f, &u_off));
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ctrl_step(&ctl_on, t_s, x, 0.0f, &u_on));
+        const int hold = (pma_ctrl_out(&ctl_on)->flags & PMA_PPC_FLAG_FF_HOLD) != 0;
+        held += hold;
+        held_off += (pma_ctrl_out(&ctl_off)->flags & PMA_PPC_FLAG_FF_HOLD) != 0;
+        if (t_s > 1.2f) held_standing += hold;
+        if (k == 900) {
+            /* arriving: the held integrator is about where it started (ff_init 0; it integrated
+             * only the observer's first ticks), the other has wound up */
+            const float ff_on = u_on - law_u(&ctl_on), ff_off = u_off - law_u(&ctl_off);
+            printf("ff_hold: held %d of 900 ticks; the integrators at arrival %.3f held, %.3f not\n",
+                   held, (double)ff_on, (double)ff_off);
+            TEST_ASSERT_TRUE(held > 800);
+            TEST_ASSERT_TRUE(fabsf(ff_off) > 10.0f);
+            TEST_ASSERT_TRUE(fabsf(ff_on) < 0.02f * fabsf(ff_off));
+        }
+    }
+    TEST_ASSERT_EQUAL_INT(0, held_off);
+    TEST_ASSERT_EQUAL_INT(0, held_standing);
+    par.ppc_ff_hold_speed_cm_s = -1.0f;
+    TEST_ASSERT_EQUAL_INT(PMA_ERR_RANGE, pma_ctrl_start(&ctl_on, &par, PERIOD_S));
+}
+
 /* Q16.16 time ends at 32767 s: the Q16.16 slot refuses a step past it (the application then
  * faults CONTROLLER); float goes on. */
 static void test_time_beyond_the_fixed_point_range(void)
@@ -521,6 +584,7 @@ int main(void)
     RUN_TEST(test_ref_ff_hyst_adds_a_play_operator_on_the_reference);
     RUN_TEST(test_ref_ff_hyst_adapts_to_the_muscles_hysteresis);
     RUN_TEST(test_u_lpf_filters_the_laws_command);
+    RUN_TEST(test_ff_hold_waits_while_the_muscle_closes);
     RUN_TEST(test_time_beyond_the_fixed_point_range);
     RUN_TEST(test_swing_limit_to_limit_after_a_widening_hands_over);
     RUN_TEST(test_one_limit_or_a_late_swing_keeps_the_law);

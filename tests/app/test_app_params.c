@@ -58,7 +58,7 @@ static void test_table_is_sorted_and_consistent(void)
 
 static void test_find_unknown_ids(void)
 {
-    static const uint16_t unknown[] = {0, 6, 15, 20, 31, 60, 104, 118, 133, 148, 169, 255,
+    static const uint16_t unknown[] = {0, 6, 15, 20, 31, 61, 104, 118, 133, 148, 169, 255,
                                        0x7FFF, 0xFFFF};
     for (size_t i = 0; i < sizeof unknown / sizeof unknown[0]; ++i) {
         TEST_ASSERT_NULL(pma_param_find(unknown[i]));

@@ -306,6 +306,9 @@ class PpcRunner:
         # sign of u_law decides the anti-windup hold; exactly 0 (t = 0) is deliberate
         if cfg.ff_gain_per_s > 0 and o.u_law != 0.0 and abs(o.u_law) <= SCREEN_FACTOR * tol.u_law:
             ok = False
+        # |v| at the hold speed decides FF_HOLD (v and e are exact in both arithmetics)
+        if cfg.ff_gain_per_s > 0 and cfg.ff_hold_speed_cm_s > 0 and near(abs(v), cfg.ff_hold_speed_cm_s, 2 * LSB):
+            ok = False
         if not ok:
             self._restore(saved)
             return False
@@ -502,13 +505,14 @@ def r2_for_ulaw(cfg: ref.PpcConfig, u_law: float) -> float:
 
 
 def ppc_ff_set(name: str, doc: str, ff_gain: float, period: float, ff_init: float,
-               phases: Sequence[tuple[int, float]], seed: int) -> dict:
+               phases: Sequence[tuple[int, float]], seed: int, hold: float = 0.0) -> dict:
     """Case 3 parameters with the feedforward on: a sequence of phases, each (rows, u_law
     target), at period steps after t_u, so u_ff integrates the law's output, the output
     saturates and the anti-windup holds u_ff. The first rows are t = 0 (u = ff_init) and
     the tuning phase."""
     cfg = ref.PpcConfig(w1_cm=0.2, t_u_s=2.0, **{**PAPER_CFG, "ff_gain_per_s": ff_gain,
-                                                  "period_s": period, "ff_init": ff_init})
+                                                  "period_s": period, "ff_init": ff_init,
+                                                  "ff_hold_speed_cm_s": hold})
     run = PpcRunner(cfg)
     rng = np.random.default_rng(seed)
     ppc_add_plain(run, 0.0, -1.0, 0.0, -2.0)
@@ -598,7 +602,8 @@ def ppc_cfg_c(c: ref.PpcConfig) -> str:
         ("w2_cm_s", cf(c.w2_cm_s)), ("t_u_s", cf(c.t_u_s)), ("u_min", cf(c.u_min)),
         ("u_max", cf(c.u_max)), ("barrier_margin", cf(c.barrier_margin)),
         ("soft_barrier_r", cf(c.soft_barrier_r)), ("ff_gain_per_s", cf(c.ff_gain_per_s)),
-        ("ff_init", cf(c.ff_init)), ("period_s", cf(c.period_s)),
+        ("ff_init", cf(c.ff_init)), ("ff_hold_speed_cm_s", cf(c.ff_hold_speed_cm_s)),
+        ("period_s", cf(c.period_s)),
         ("band_enabled", str(int(c.band_enabled))), ("k_low_cm", cf(c.k_low_cm)),
         ("k_high_cm", cf(c.k_high_cm)), ("widen_r", cf(c.widen_r)),
         ("widen2_steps", f"{int(c.widen2_steps)}u")])
@@ -630,6 +635,11 @@ def build_ppc() -> str:
                    "itself reaches its clamp at u_max and u_min",
                    150.0, 0.01, 300.0,
                    ((3, 80.0), (2, -300.0), (3, 200.0), (2, -200.0), (3, -100.0)), 1402),
+        ppc_ff_set("ff_hold", "the feedforward set 'ff' with ff_hold_speed_cm_s 0.25: the "
+                   "integrator also holds where e and v have opposite signs and |v| > 0.25 (FF_HOLD)",
+                   4.0, 0.01, 200.0,
+                   ((30, 120.0), (10, 60.0), (14, -150.0), (28, -350.0), (3, -math.inf),
+                    (3, math.inf), (8, 30.0)), 1403, hold=0.25),
         ppc_widen_set(),
     ]
     for s in sets:

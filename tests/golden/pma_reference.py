@@ -31,6 +31,7 @@ import numpy as np
 __all__ = [
     "PPC_FLAG_BARRIER1", "PPC_FLAG_BARRIER2", "PPC_FLAG_SAT_HIGH", "PPC_FLAG_SAT_LOW",
     "PPC_FLAG_SOFT1", "PPC_FLAG_SOFT2", "PPC_FLAG_WIDEN1", "PPC_FLAG_WIDEN2", "PPC_FLAG_WIDE",
+    "PPC_FLAG_FF_HOLD",
     "MFAC_FLAG_RESET", "MFAC_FLAG_SAT_HIGH", "MFAC_FLAG_SAT_LOW",
     "PID_FLAG_SAT_HIGH", "PID_FLAG_SAT_LOW",
     "VELEST_FILTERED_DIFF", "VELEST_TRACKING",
@@ -54,6 +55,7 @@ PPC_FLAG_SOFT2 = 0x20
 PPC_FLAG_WIDEN1 = 0x40
 PPC_FLAG_WIDEN2 = 0x80
 PPC_FLAG_WIDE = 0x100
+PPC_FLAG_FF_HOLD = 0x200
 WIDEN_G_MIN = 2.0 ** -20    # the widened funnel's scale is kept at or above this
 
 MFAC_FLAG_RESET = 0x01
@@ -119,6 +121,7 @@ class PpcConfig:
     soft_barrier_r: float = 1.0
     ff_gain_per_s: float = 0.0
     ff_init: float = 0.0
+    ff_hold_speed_cm_s: float = 0.0   # the integrator holds while the muscle closes faster (0: off)
     period_s: float = 1e-3
     band_enabled: int = 0
     k_low_cm: float = -3.0
@@ -130,7 +133,7 @@ class PpcConfig:
         """Raise ValueError on a configuration ppc.h declares invalid."""
         if not _finite(self.a_cm_s, self.c, self.w1_cm, self.w2_cm_s, self.t_u_s, self.u_min,
                        self.u_max, self.barrier_margin, self.soft_barrier_r,
-                       self.ff_gain_per_s, self.ff_init, self.period_s):
+                       self.ff_gain_per_s, self.ff_init, self.ff_hold_speed_cm_s, self.period_s):
             raise ValueError("non-finite ppc configuration")
         if min(self.a_cm_s, self.c, self.w1_cm, self.w2_cm_s, self.t_u_s, self.period_s) <= 0:
             raise ValueError("a, c, w1, w2, t_u and period must be > 0")
@@ -140,8 +143,8 @@ class PpcConfig:
             raise ValueError("barrier_margin must be in (0, 0.5]")
         if not 0.0 < self.soft_barrier_r <= 1.0:
             raise ValueError("soft_barrier_r must be in (0, 1]")
-        if self.ff_gain_per_s < 0:
-            raise ValueError("ff_gain_per_s must be >= 0")
+        if self.ff_gain_per_s < 0 or self.ff_hold_speed_cm_s < 0:
+            raise ValueError("ff_gain_per_s and ff_hold_speed_cm_s must be >= 0")
         if not self.u_min <= self.ff_init <= self.u_max:
             raise ValueError("ff_init must be within [u_min, u_max]")
         if not _finite(self.widen_r) or not (self.widen_r == 0.0 or
@@ -334,7 +337,10 @@ class Ppc:
             flags |= PPC_FLAG_SAT_LOW
         u = _clamp(u_unclamped, cfg.u_min, cfg.u_max)
         if cfg.ff_gain_per_s > 0.0:
-            hold = ((flags & PPC_FLAG_SAT_HIGH) and u_law > 0.0) or \
+            hv = cfg.ff_hold_speed_cm_s   # the muscle closes on the reference faster than hv
+            if hv > 0.0 and ((e > 0.0 and v_cm_s < -hv) or (e < 0.0 and v_cm_s > hv)):
+                flags |= PPC_FLAG_FF_HOLD
+            hold = (flags & PPC_FLAG_FF_HOLD) or ((flags & PPC_FLAG_SAT_HIGH) and u_law > 0.0) or \
                    ((flags & PPC_FLAG_SAT_LOW) and u_law < 0.0)
             if not hold:   # bounded so that u_ff + u_ext stays within the input range
                 self.u_ff = _clamp(u_ff + cfg.ff_gain_per_s * cfg.period_s * u_law,

@@ -176,6 +176,7 @@ static void ppc_tol(const prim_t *p, const pma_ppc_config_t *cfg, const golden_p
 static int ff_integrates(const pma_ppc_config_t *cfg, const golden_ppc_row_t *r)
 {
     if (!(cfg->ff_gain_per_s > 0.0f)) return 0;
+    if (r->flags & PMA_PPC_FLAG_FF_HOLD) return 0;
     if ((r->flags & PMA_PPC_FLAG_SAT_HIGH) && r->u_law > 0.0f) return 0;
     if ((r->flags & PMA_PPC_FLAG_SAT_LOW) && r->u_law < 0.0f) return 0;
     return 1;

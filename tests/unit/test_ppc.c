@@ -330,6 +330,59 @@ static void test_feedforward(void)
     TEST_ASSERT_TRUE(on.u_ff == 10.0f);
 }
 
+/* ff_hold_speed_cm_s: the feedforward integrator holds (flag FF_HOLD) while the error and the
+ * velocity input have opposite signs and the speed is above the hold speed: the muscle closes
+ * on the reference faster than that. Slower, standing, moving away, or the option off: it
+ * integrates as before. Float and fixed point decide alike, and the law's output is the same. */
+static void test_feedforward_holds_while_closing(void)
+{
+    pma_ppc_config_t c = case3();
+    c.ff_gain_per_s = 2.0f;
+    c.ff_init = 10.0f;
+    c.ff_hold_speed_cm_s = 0.1f;   /* speeds below w2 = 0.5 cm/s: the law inside its funnels */
+    const struct { float x_cm, v_cm_s; int held; } steps[] = {
+        {-1.99f, -0.2f, 1},   /* e > 0, closing at 0.2 cm/s: held */
+        {-1.99f, -0.05f, 0},  /* closing slower than the hold speed */
+        {-1.99f, 0.0f, 0},    /* standing */
+        {-1.99f, 0.2f, 0},    /* moving away */
+        {-2.01f, 0.2f, 1},    /* e < 0, closing from below */
+        {-2.01f, 0.15f, 1},
+        {-2.01f, -0.2f, 0},
+        {-2.0f, -0.2f, 0},    /* on the reference */
+    };
+    for (unsigned i = 0; i < sizeof steps / sizeof steps[0]; ++i) {
+        pma_ppc_f32_t f;
+        pma_ppc_q16_t q;
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_f32(&f, &c));
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_q16(&q, &c));
+        float u;
+        pma_q16_t uq;
+        TEST_ASSERT_EQUAL_INT(PMA_OK,
+                              pma_ppc_step_f32(&f, 5.0f, steps[i].x_cm, steps[i].v_cm_s, -2.0f, &u));
+        TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_q16(&q, Q16(5.0), Q16(steps[i].x_cm),
+                                                       Q16(steps[i].v_cm_s), Q16(-2.0), &uq));
+        const uint32_t want = steps[i].held ? PMA_PPC_FLAG_FF_HOLD : 0u;
+        TEST_ASSERT_EQUAL_HEX32(want, f.out.flags & PMA_PPC_FLAG_FF_HOLD);
+        TEST_ASSERT_EQUAL_HEX32(want, q.out.flags & PMA_PPC_FLAG_FF_HOLD);
+        if (steps[i].held) {
+            TEST_ASSERT_TRUE(f.u_ff == 10.0f);
+            TEST_ASSERT_TRUE(q.u_ff_q32 == (int64_t)Q16(10.0) * 65536);
+        } else {
+            assert_near(f.u_ff, 10.0 + 2.0 * 1e-3 * f.out.u_law, 1e-5);
+            TEST_ASSERT_TRUE(f.out.u_law == 0.0f || f.u_ff != 10.0f);
+        }
+        assert_near(u, 10.0 + f.out.u_law, 1e-4);   /* the law's own output acts either way */
+    }
+    /* off (0): closing fast integrates as before */
+    c.ff_hold_speed_cm_s = 0.0f;
+    pma_ppc_f32_t off;
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_init_f32(&off, &c));
+    float u;
+    TEST_ASSERT_EQUAL_INT(PMA_OK, pma_ppc_step_f32(&off, 5.0f, -1.99f, -0.2f, -2.0f, &u));
+    TEST_ASSERT_EQUAL_HEX32(0u, off.out.flags & PMA_PPC_FLAG_FF_HOLD);
+    TEST_ASSERT_TRUE(off.u_ff != 10.0f);
+}
+
 /* An input added by the caller (pma_ppc_step_ext_*, the application's reference feedforward)
  * is inside the clamp: the flags and the feedforward's anti-windup see the whole output, so a
  * reference beyond the plant's reach keeps the input at its limit while the law pushes there
@@ -432,6 +485,8 @@ static void test_invalid_config(void)
     BAD(soft_barrier_r, 0.0f, PMA_ERR_RANGE);
     BAD(soft_barrier_r, 1.5f, PMA_ERR_RANGE);
     BAD(ff_gain_per_s, -1.0f, PMA_ERR_RANGE);
+    BAD(ff_hold_speed_cm_s, -0.1f, PMA_ERR_RANGE);
+    BAD(ff_hold_speed_cm_s, NAN, PMA_ERR_NOT_FINITE);
     BAD(ff_init, 1000.0f, PMA_ERR_RANGE);
     BAD(widen_r, 0.01f, PMA_ERR_RANGE);
     BAD(widen_r, -0.5f, PMA_ERR_RANGE);
@@ -528,6 +583,7 @@ int main(void)
     RUN_TEST(test_soft_barrier);
     RUN_TEST(test_funnel_widening);
     RUN_TEST(test_feedforward);
+    RUN_TEST(test_feedforward_holds_while_closing);
     RUN_TEST(test_external_input);
     RUN_TEST(test_invalid_config);
     RUN_TEST(test_bad_step_inputs);

@@ -45,6 +45,7 @@ enum pma_param_id {
     PMA_PARAM_PPC_U_LPF_HZ = 57,
     PMA_PARAM_PPC_REF_FF_HYST_GAIN_PER_S = 58,
     PMA_PARAM_PPC_REF_FF_HYST_MAX = 59,
+    PMA_PARAM_PPC_FF_HOLD_SPEED_CM_S = 60,
     PMA_PARAM_PID_KP = 64,
     PMA_PARAM_PID_KI = 65,
     PMA_PARAM_PID_KD = 66,
@@ -86,9 +87,9 @@ enum pma_param_id {
     PMA_PARAM_SAFETY_SAFE_KPA = 168,
 };
 
-#define PMA_PARAM_COUNT 77u
+#define PMA_PARAM_COUNT 78u
 /* CRC-32 of the table (pmactl.protocol.param_table_hash): DEVICE_INFO's ParamTableHash. */
-#define PMA_PARAM_TABLE_HASH 0xB57CD05Eu
+#define PMA_PARAM_TABLE_HASH 0xE345981Bu
 
 #define PMA_SYS_PLANT_BRIDGE_OFF 0u
 #define PMA_SYS_PLANT_BRIDGE_ON 1u
@@ -153,6 +154,7 @@ typedef struct pma_params {
     float ppc_u_lpf_hz;                /* id 57 [Hz] */
     float ppc_ref_ff_hyst_gain_per_s;  /* id 58 [1/s] */
     float ppc_ref_ff_hyst_max;         /* id 59 [input unit] */
+    float ppc_ff_hold_speed_cm_s;      /* id 60 [cm/s] */
     float pid_kp;                      /* id 64 [input unit/cm] */
     float pid_ki;                      /* id 65 [input unit/(cm*s)] */
     float pid_kd;                      /* id 66 [input unit*s/cm] */

@@ -168,12 +168,19 @@ int pma_ppc_step_ext_f32(pma_ppc_f32_t *s, float t_s, float x_cm, float v_cm_s, 
     }
 
     /* optional steady-state feedforward: integrate the law's output unless the
-     * output is saturated in the direction the law pushes (anti-windup) */
-    if (s->cfg.ff_gain_per_s > 0.0f &&
-        !pma_ppc_ff_held(o.flags, o.u_law > 0.0f, o.u_law < 0.0f)) {
-        float ff = s->u_ff + s->cfg.ff_gain_per_s * s->cfg.period_s * o.u_law;
-        /* bounded so that u_ff + u_ext stays within the input range (its wind-up bound) */
-        s->u_ff = fminf(fmaxf(ff, s->cfg.u_min - u_ext), s->cfg.u_max - u_ext);
+     * output is saturated in the direction the law pushes (anti-windup) or the muscle closes on
+     * the reference faster than ff_hold_speed_cm_s (FF_HOLD, an option) */
+    if (s->cfg.ff_gain_per_s > 0.0f) {
+        const float hold_v = s->cfg.ff_hold_speed_cm_s;
+        if (hold_v > 0.0f &&
+            ((o.e_cm > 0.0f && v_cm_s < -hold_v) || (o.e_cm < 0.0f && v_cm_s > hold_v))) {
+            o.flags |= PMA_PPC_FLAG_FF_HOLD;
+        }
+        if (!pma_ppc_ff_held(o.flags, o.u_law > 0.0f, o.u_law < 0.0f)) {
+            float ff = s->u_ff + s->cfg.ff_gain_per_s * s->cfg.period_s * o.u_law;
+            /* bounded so that u_ff + u_ext stays within the input range (its wind-up bound) */
+            s->u_ff = fminf(fmaxf(ff, s->cfg.u_min - u_ext), s->cfg.u_max - u_ext);
+        }
     }
     if (o.flags & PMA_PPC_FLAG_BARRIER1) s->breaches1++;
     if (o.flags & PMA_PPC_FLAG_BARRIER2) s->breaches2++;

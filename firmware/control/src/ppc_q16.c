@@ -23,7 +23,7 @@ int pma_ppc_init_q16(pma_ppc_q16_t *s, const pma_ppc_config_t *cfg)
         return PMA_ERR_FIXED_RANGE;
     }
     const float q16_vals[] = {cfg->a_cm_s, cfg->c, cfg->t_u_s, cfg->u_min, cfg->u_max,
-                              cfg->ff_init};
+                              cfg->ff_init, cfg->ff_hold_speed_cm_s};
     for (unsigned i = 0; i < sizeof q16_vals / sizeof q16_vals[0]; ++i) {
         PMA_CHECK(pma_check_q16_range(q16_vals[i]));
     }
@@ -47,6 +47,7 @@ int pma_ppc_init_q16(pma_ppc_q16_t *s, const pma_ppc_config_t *cfg)
     s->inv_w2_q24 = pma_to_q(1.0f / cfg->w2_cm_s, 24);
     s->inv_t_u_q24 = pma_to_q(1.0f / cfg->t_u_s, 24);
     s->ff_k = pma_to_q(ff_k, 30);
+    s->ff_hold_v = pma_to_q(cfg->ff_hold_speed_cm_s, 16);
     s->r_max = pma_to_q(1.0f - cfg->barrier_margin, 30);
     s->widen_r = pma_to_q(cfg->widen_r, 30);
     s->widen2_steps = cfg->widen2_steps;
@@ -254,12 +255,19 @@ int pma_ppc_step_ext_q16(pma_ppc_q16_t *s, pma_q16_t t_s, pma_q16_t x_cm, pma_q1
         o->u = v;
     }
 
-    if (s->ff_k > 0 &&
-        !pma_ppc_ff_held(o->flags, o->u_law > 0, o->u_law < 0)) {
-        int64_t ff = s->u_ff_q32 + pma_rshift_round(pma_mul32(o->u_law, s->ff_k), 14); /* Q32 */
-        /* bounded so that u_ff + u_ext stays within the input range (its wind-up bound) */
-        const int64_t lo = ((int64_t)s->u_min - u_ext) * 65536, hi = ((int64_t)s->u_max - u_ext) * 65536;
-        s->u_ff_q32 = ff < lo ? lo : (ff > hi ? hi : ff);
+    if (s->ff_k > 0) {
+        /* option: the muscle closes on the reference faster than ff_hold_speed_cm_s */
+        const pma_q16_t hold_v = s->ff_hold_v;
+        if (hold_v > 0 && ((o->e_cm > 0 && v_cm_s < -hold_v) || (o->e_cm < 0 && v_cm_s > hold_v))) {
+            o->flags |= PMA_PPC_FLAG_FF_HOLD;
+        }
+        if (!pma_ppc_ff_held(o->flags, o->u_law > 0, o->u_law < 0)) {
+            int64_t ff = s->u_ff_q32 + pma_rshift_round(pma_mul32(o->u_law, s->ff_k), 14); /* Q32 */
+            /* bounded so that u_ff + u_ext stays within the input range (its wind-up bound) */
+            const int64_t lo = ((int64_t)s->u_min - u_ext) * 65536;
+            const int64_t hi = ((int64_t)s->u_max - u_ext) * 65536;
+            s->u_ff_q32 = ff < lo ? lo : (ff > hi ? hi : ff);
+        }
     }
     if (o->flags & PMA_PPC_FLAG_BARRIER1) s->breaches1++;
     if (o->flags & PMA_PPC_FLAG_BARRIER2) s->breaches2++;

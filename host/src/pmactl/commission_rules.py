@@ -798,6 +798,7 @@ def derive(m: Measured, task: Task) -> Derivation:
         "ppc.c": round(c, 4),
         "ppc.ff_gain_per_s": round(ff_gain, 3),
         "ppc.ff_init": round(u_start, 2),
+        "ppc.ff_hold_speed_cm_s": round(v_max, 4),
         "ppc.ref_vel": 1,
         "ppc.ref_ff": round(ref_ff, 3),
         "ppc.ref_ff_lead_s": round(ref_ff_lead, 4),

@@ -44,6 +44,15 @@
  *    the steady pressure that the law (no integral action) can otherwise only
  *    produce by pushing lambda2 towards its barrier. 0 and 0 = off.
  *    (Fixed point: ff_gain_per_s * period_s < 1, else PMA_ERR_FIXED_RANGE.)
+ *  - ff_hold_speed_cm_s >= 0 (with the feedforward on): the integrator also holds (flag
+ *    FF_HOLD) while the muscle closes on the reference faster than this: the
+ *    law's velocity input v and the error e have opposite signs and |v| is
+ *    above it. A large error (the start, a disturbance) makes the law ask for
+ *    a speed in proportion to it; a loop with lag cannot stop from that speed
+ *    within the funnel, and an integrator that kept integrating the law's
+ *    demand on the way would carry the muscle through the reference by
+ *    (speed x lag). Where the muscle already closes that fast the integrator
+ *    waits; the law's own output still acts. 0 = off.
  * Output: u = clamp(u_ff + u_law + u_ext, u_min, u_max), with u_ext an input
  * the caller adds (pma_ppc_step_ext_*: the application's reference
  * feedforward; 0 in pma_ppc_step_*). The clamp's flags and the feedforward's
@@ -89,6 +98,8 @@ typedef struct pma_ppc_config {
     float soft_barrier_r;   /* (0, 1]; 1 = off (paper's law) */
     float ff_gain_per_s;    /* >= 0 [1/s]; 0 = off */
     float ff_init;          /* initial feedforward [input unit], within [u_min, u_max] */
+    float ff_hold_speed_cm_s; /* >= 0 [cm/s]: the feedforward holds while the muscle closes on the
+                               * reference faster than this (see above); 0 = off */
     float widen_r;          /* funnel widening instead of the clamp: 0 = off (paper's law), else
                              * in [0.05, 1 - barrier_margin) (see "Funnel widening" above) */
     uint32_t widen2_steps;  /* with widen_r: lambda2's funnel widens after this many consecutive
@@ -116,13 +127,17 @@ int pma_ppc_validate_config(const pma_ppc_config_t *cfg);
 #define PMA_PPC_FLAG_WIDEN1   0x40u   /* widen_r: w1's funnel widened this step (instead of a clamp) */
 #define PMA_PPC_FLAG_WIDEN2   0x80u   /* widen_r: w2's funnel widened this step (instead of a clamp) */
 #define PMA_PPC_FLAG_WIDE     0x100u  /* widen_r: a funnel is still wider than assigned (g < 1) */
+#define PMA_PPC_FLAG_FF_HOLD  0x200u  /* ff_hold_speed_cm_s: the muscle closes on the reference
+                                       * faster than that; the feedforward held this step */
 
 /* The feedforward integrator's anti-windup: it holds while the output is clamped in the
- * direction the law pushes (flags: the step's PMA_PPC_FLAG_*; law_up / law_down: u_law > 0 /
- * u_law < 0). One rule for the integrator and for whatever integrates beside it. */
+ * direction the law pushes, and while the muscle closes on the reference faster than
+ * ff_hold_speed_cm_s (FF_HOLD) (flags: the step's PMA_PPC_FLAG_*; law_up / law_down:
+ * u_law > 0 / u_law < 0). One rule for the integrator and for whatever integrates beside it. */
 static inline int pma_ppc_ff_held(uint32_t flags, int law_up, int law_down)
 {
-    return ((flags & PMA_PPC_FLAG_SAT_HIGH) && law_up) || ((flags & PMA_PPC_FLAG_SAT_LOW) && law_down);
+    return (flags & PMA_PPC_FLAG_FF_HOLD) || ((flags & PMA_PPC_FLAG_SAT_HIGH) && law_up) ||
+           ((flags & PMA_PPC_FLAG_SAT_LOW) && law_down);
 }
 
 /* Internals of the last step, for telemetry (float variant). */
@@ -204,8 +219,9 @@ typedef struct pma_ppc_q16 {
     uint32_t widen_bits;            /* bits 2 + i: channel i widens; bit i (0, 1): channel i
                                      * wider than assigned. One word for the step's common case */
     pma_ppc_out_q16_t out;
-    /* funnel widening, rarely used: after the step's hot fields, which the Cortex-M0 reaches
-     * with one load only within 124 bytes of the instance */
+    /* the feedforward's hold and funnel widening, read only when on: after the step's hot
+     * fields, which the Cortex-M0 reaches with one load only within 124 bytes of the instance */
+    pma_q16_t ff_hold_v;            /* ff_hold_speed_cm_s, Q16.16 (0: off) */
     pma_q30_t widen_r;              /* 0: widening off */
     uint32_t widen2_steps, clamp_run2;  /* as the float variant's */
     pma_q30_t widen_k[2];           /* g_i at channel i's last widening, Q2.30 (while wide) */
