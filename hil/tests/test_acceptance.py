@@ -147,10 +147,13 @@ def test_case3_pid_runs_for_comparison(nominal_runs):
 
 
 def test_smaller_tu_enters_the_band_sooner(runs):
-    """2b (t_u 2 s) enters the band no later than 2a (t_u 6 s). Into w1 itself both come within
-    0.2 s, while the input sits at its limit and the rig's own motion decides (the same tick, or
-    2b a tick or two ahead); where the funnel decides, 2b is strictly sooner: its error first
-    comes within w1 / 10."""
+    """2b (t_u 2 s) enters the band no later than 2a (t_u 6 s), into w1 and into w1 / 10. Both
+    come within w1 in 0.4 s or less, before either funnel has narrowed much: the start's holding
+    input (ppc.ff_init) and the reference feedforward carry the muscle in, closing faster than
+    ppc.ff_hold_speed_cm_s, so the feedforward integrator waits in both. Into w1 / 10, 2b is 0 to
+    36 ms ahead on these rigs (on the idealised one the same tick, 0.327 s: before the hold, 2b's
+    integrator wound up faster on the way in and got there 3 ms sooner, the windup the hold
+    prevents, docs/controllers.md option 8)."""
     a, out_a = runs("case2a")
     b, out_b = runs("case2b")
     assert (a["controllers"]["ppc"]["t_u_s"], b["controllers"]["ppc"]["t_u_s"]) == (6.0, 2.0)
@@ -162,7 +165,7 @@ def test_smaller_tu_enters_the_band_sooner(runs):
         assert len(inside), "never within w1 / 10"
         return float(sig["ppc__t_s"][inside[0]])
     ta, tb = first_within_tenth(a, out_a), first_within_tenth(b, out_b)
-    assert tb < ta, (tb, ta)
+    assert tb <= ta, (tb, ta)
 
 
 @pytest.mark.parametrize("case", ["case1", "case2a", "case2b", "case3", "load_change", "constraint_approach"])
