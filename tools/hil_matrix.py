@@ -18,7 +18,8 @@ their summaries. A rig is a base profile (nominal, dmsp10, mas10-itv2050: the ta
 hil/scenarios/ or hil/scenarios/realistic/PROFILE/) and rig parameter values (hil/rig_params.py).
 `--matrix random` draws its rigs instead (RANDOM_RANGES: a base profile, then each property
 scaled or shifted from that profile's own value with a probability of 0.6), so that nobody
-chose them, not even after seeing the rules; --seed makes a draw repeatable.
+chose them, not even after seeing the rules; --seed makes a draw repeatable; --wide draws from
+WIDE_RANGES, about 1.5 times as far out (a stress draw beyond the rigs the rules were checked on).
 Deterministic: the same code (and seed) prints the same table. `--reuse` takes a run's summary
 from `--out` where it is already there (run_NNN.json, in the order of the jobs: rig by rig, task
 by task, seed by seed), so that a table or figure can be made again without the runs; it is only
@@ -163,10 +164,30 @@ RANDOM_RANGES: tuple[tuple[str, str, float, float, tuple[str, ...]], ...] = (
     ("creep.frac_contract", "shift", 0.0, 0.12, PROFILES),
     ("drift.temp_rate_k_per_s", "scale", 1.0, 20.0, PROFILES),
 )
+# --wide: a stress draw, the same properties about 1.5 times as far out (a spring +-40 %, loads
+# 0.4-2x, valves down to 0.3x, dead times to 3.5x, noise to 6x, creep up to 0.2 more): rigs beyond
+# those the rules were checked on, to see how the controllers fail there, not only whether
+WIDE_RANGES: tuple[tuple[str, str, float, float, tuple[str, ...]], ...] = (
+    ("muscle.stiffness_scale", "scale", 0.6, 1.45, PROFILES),
+    ("muscle.hyst_force_n", "scale", 0.5, 2.2, PROFILES),
+    ("load.mass_kg", "scale", 0.4, 2.0, PROFILES),
+    ("load.bias_force_n", "shift", -40.0, 40.0, PROFILES),
+    ("regulator.tau_s", "scale", 1.0, 4.5, ("nominal",)),
+    ("regulator.dead_time_s", "scale", 1.0, 6.0, ("nominal",)),
+    ("valve.fill_rate_kpa_s", "scale", 0.3, 1.5, ("dmsp10", "mas10-itv2050")),
+    ("valve.exhaust_rate_kpa_s", "scale", 0.3, 1.5, ("dmsp10", "mas10-itv2050")),
+    ("valve.dead_time_rise_s", "scale", 0.7, 3.5, ("dmsp10", "mas10-itv2050")),
+    ("valve.dead_time_fall_s", "scale", 0.7, 3.5, ("dmsp10", "mas10-itv2050")),
+    ("sensor.noise_cm", "scale", 1.0, 6.0, PROFILES),
+    ("sensor.adc_bits", "bits", 10, 12, PROFILES),
+    ("creep.frac_contract", "shift", 0.0, 0.2, PROFILES),
+    ("drift.temp_rate_k_per_s", "scale", 1.0, 30.0, PROFILES),
+)
 
 
-def random_rigs(seed: int, count: int) -> tuple[Rig, ...]:
-    """`count` rigs drawn with numpy's generator from `seed` (RANDOM_RANGES)."""
+def random_rigs(seed: int, count: int, ranges: tuple[tuple[str, str, float, float, tuple[str, ...]], ...]
+                = RANDOM_RANGES) -> tuple[Rig, ...]:
+    """`count` rigs drawn with numpy's generator from `seed` (`ranges`: RANDOM_RANGES or WIDE_RANGES)."""
     from hil.scenario import load  # the harness (installed), for each profile's own values
     rng = np.random.default_rng(seed)
     rigs = []
@@ -174,7 +195,7 @@ def random_rigs(seed: int, count: int) -> tuple[Rig, ...]:
         profile = PROFILES[int(rng.integers(len(PROFILES)))]
         base = load(task_file(profile, "case3")).rig_params()
         values, labels = [], []
-        for path, how, lo, hi, where in RANDOM_RANGES:
+        for path, how, lo, hi, where in ranges:
             take = rng.random() < 0.6          # drawn in every case: the stream does not depend on it
             x = rng.uniform(lo, hi)
             if not take or profile not in where:
@@ -249,6 +270,8 @@ def main() -> int:
     ap.add_argument("--out", type=Path, help="keep each run's summary JSON in this folder")
     ap.add_argument("--seed", type=int, nargs="+", help="--matrix random: the draws' seeds (default 1)")
     ap.add_argument("--count", type=int, help="--matrix random: how many rigs (default 8)")
+    ap.add_argument("--wide", action="store_true",
+                    help="--matrix random: draw from WIDE_RANGES, about 1.5 times as far out (a stress draw)")
     ap.add_argument("--quick", action="store_true", help="Case 3's --quick run (its first 60 s)")
     ap.add_argument("--reuse", action="store_true", help="take each run's summary from --out where it is there")
     ap.add_argument("--plot", type=Path, help="a figure of every run's PPC / MFAC RMSTE per window (PNG)")
@@ -259,8 +282,8 @@ def main() -> int:
     args = ap.parse_args()
     if args.jobs < 1:
         ap.error("--jobs must be at least 1")
-    if args.matrix != "random" and (args.seed is not None or args.count is not None):
-        ap.error("--seed and --count go with --matrix random only")
+    if args.matrix != "random" and (args.seed is not None or args.count is not None or args.wide):
+        ap.error("--seed, --count and --wide go with --matrix random only")
     seeds: list[int] = [1] if args.seed is None else args.seed
     args.count = 8 if args.count is None else args.count
     if args.count < 1:
@@ -285,7 +308,7 @@ def main() -> int:
             jobs.append((f.stem, "", [str(f), *limit]))
     else:
         if args.matrix == "random":
-            draws = [random_rigs(s, args.count) for s in seeds]
+            draws = [random_rigs(s, args.count, WIDE_RANGES if args.wide else RANDOM_RANGES) for s in seeds]
             rigs = draws[0] if len(seeds) == 1 else tuple(
                 Rig(f"S{s} {r.name}", r.profile, r.values) for s, d in zip(seeds, draws) for r in d)
             quick3 = args.quick

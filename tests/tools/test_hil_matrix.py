@@ -52,11 +52,12 @@ def test_every_rig_value_is_a_rig_parameter(matrix):
             base.replace(**{path: float(number)}).validate()   # ValueError for an unknown path
 
 
-def test_random_rigs_are_repeatable_valid_and_within_their_spans():
-    rigs = hm.random_rigs(5, 12)
-    assert rigs == hm.random_rigs(5, 12) and rigs != hm.random_rigs(6, 12)
-    assert hm.random_rigs(5, 3) == rigs[:3]            # the first n of a longer draw
-    spans = {path: (how, lo, hi, where) for path, how, lo, hi, where in hm.RANDOM_RANGES}
+@pytest.mark.parametrize("ranges", [hm.RANDOM_RANGES, hm.WIDE_RANGES], ids=["random", "wide"])
+def test_random_rigs_are_repeatable_valid_and_within_their_spans(ranges):
+    rigs = hm.random_rigs(5, 12, ranges)
+    assert rigs == hm.random_rigs(5, 12, ranges) and rigs != hm.random_rigs(6, 12, ranges)
+    assert hm.random_rigs(5, 3, ranges) == rigs[:3]            # the first n of a longer draw
+    spans = {path: (how, lo, hi, where) for path, how, lo, hi, where in ranges}
     for rig in rigs:
         base = scn.load(hm.task_file(rig.profile, "case3")).rig_params()
         params = base
@@ -82,6 +83,7 @@ def test_bad_options_exit_2(tmp_path):
     for args in (["--matrix", "eleven"], ["--matrix", "ten", "--jobs", "0"], [],
                  ["--matrix", "random", "--count", "0"], ["--matrix", "random", "--seed", "-1"],
                  ["--matrix", "ten", "--seed", "3"], ["--matrix", "seven", "--count=2"],
+                 ["--matrix", "variants", "--wide"],
                  ["--matrix", "random", "--out", str(a_file)], ["--matrix", "random", "--seed", "1", "1"],
                  ["--matrix", "random", "--reuse"], ["--matrix", "random", "--plot", str(tmp_path / "f.svg")],
                  ["--matrix", "random", "--plot", str(tmp_path / "no" / "f.png")],
