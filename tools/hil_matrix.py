@@ -144,49 +144,36 @@ MATRICES = {"seven": (SEVEN, True), "eight": (EIGHT, True), "ten": (TEN, False),
             "audit2": (AUDIT2, False)}   # (rigs, case3 --quick)
 
 PROFILES = ("nominal", "dmsp10", "mas10-itv2050")
-# --matrix random: (rig parameter, how it is drawn from the profile's value v, low, high, the
-# profiles it applies to). "scale": v * U(low, high); "shift": v + U(low, high); "bits": one of
-# low..high. The spans are those of docs/hil.md's variants and audits: what differs between
-# real rigs of one design.
-RANDOM_RANGES: tuple[tuple[str, str, float, float, tuple[str, ...]], ...] = (
-    ("muscle.stiffness_scale", "scale", 0.7, 1.3, PROFILES),
-    ("muscle.hyst_force_n", "scale", 0.6, 1.8, PROFILES),
-    ("load.mass_kg", "scale", 0.55, 1.5, PROFILES),
-    ("load.bias_force_n", "shift", -25.0, 25.0, PROFILES),
-    ("regulator.tau_s", "scale", 1.0, 3.3, ("nominal",)),
-    ("regulator.dead_time_s", "scale", 1.0, 4.0, ("nominal",)),
-    ("valve.fill_rate_kpa_s", "scale", 0.4, 1.3, ("dmsp10", "mas10-itv2050")),
-    ("valve.exhaust_rate_kpa_s", "scale", 0.4, 1.3, ("dmsp10", "mas10-itv2050")),
-    ("valve.dead_time_rise_s", "scale", 0.7, 2.5, ("dmsp10", "mas10-itv2050")),
-    ("valve.dead_time_fall_s", "scale", 0.7, 2.5, ("dmsp10", "mas10-itv2050")),
-    ("sensor.noise_cm", "scale", 1.0, 4.0, PROFILES),
-    ("sensor.adc_bits", "bits", 10, 12, PROFILES),
-    ("creep.frac_contract", "shift", 0.0, 0.12, PROFILES),
-    ("drift.temp_rate_k_per_s", "scale", 1.0, 20.0, PROFILES),
+# --matrix random: (rig parameter, how it is drawn from the profile's value v, the profiles it
+# applies to, low and high, and with --wide low and high). "scale": v * U(low, high); "shift":
+# v + U(low, high); "bits": one of low..high. The spans are those of docs/hil.md's variants and
+# audits: what differs between real rigs of one design. --wide: a stress draw, the same properties
+# about 1.5 times as far out (a spring +-40 %, loads 0.4-2x, valves down to 0.3x, dead times to
+# 3.5x, noise to 6x, creep up to 0.2 more): rigs beyond those the rules were checked on, to see how
+# the controllers fail there, not only whether
+_REALISTIC = ("dmsp10", "mas10-itv2050")
+_SPANS: tuple[tuple[str, str, tuple[str, ...], tuple[float, float], tuple[float, float]], ...] = (
+    ("muscle.stiffness_scale", "scale", PROFILES, (0.7, 1.3), (0.6, 1.45)),
+    ("muscle.hyst_force_n", "scale", PROFILES, (0.6, 1.8), (0.5, 2.2)),
+    ("load.mass_kg", "scale", PROFILES, (0.55, 1.5), (0.4, 2.0)),
+    ("load.bias_force_n", "shift", PROFILES, (-25.0, 25.0), (-40.0, 40.0)),
+    ("regulator.tau_s", "scale", ("nominal",), (1.0, 3.3), (1.0, 4.5)),
+    ("regulator.dead_time_s", "scale", ("nominal",), (1.0, 4.0), (1.0, 6.0)),
+    ("valve.fill_rate_kpa_s", "scale", _REALISTIC, (0.4, 1.3), (0.3, 1.5)),
+    ("valve.exhaust_rate_kpa_s", "scale", _REALISTIC, (0.4, 1.3), (0.3, 1.5)),
+    ("valve.dead_time_rise_s", "scale", _REALISTIC, (0.7, 2.5), (0.7, 3.5)),
+    ("valve.dead_time_fall_s", "scale", _REALISTIC, (0.7, 2.5), (0.7, 3.5)),
+    ("sensor.noise_cm", "scale", PROFILES, (1.0, 4.0), (1.0, 6.0)),
+    ("sensor.adc_bits", "bits", PROFILES, (10, 12), (10, 12)),
+    ("creep.frac_contract", "shift", PROFILES, (0.0, 0.12), (0.0, 0.2)),
+    ("drift.temp_rate_k_per_s", "scale", PROFILES, (1.0, 20.0), (1.0, 30.0)),
 )
-# --wide: a stress draw, the same properties about 1.5 times as far out (a spring +-40 %, loads
-# 0.4-2x, valves down to 0.3x, dead times to 3.5x, noise to 6x, creep up to 0.2 more): rigs beyond
-# those the rules were checked on, to see how the controllers fail there, not only whether
-WIDE_RANGES: tuple[tuple[str, str, float, float, tuple[str, ...]], ...] = (
-    ("muscle.stiffness_scale", "scale", 0.6, 1.45, PROFILES),
-    ("muscle.hyst_force_n", "scale", 0.5, 2.2, PROFILES),
-    ("load.mass_kg", "scale", 0.4, 2.0, PROFILES),
-    ("load.bias_force_n", "shift", -40.0, 40.0, PROFILES),
-    ("regulator.tau_s", "scale", 1.0, 4.5, ("nominal",)),
-    ("regulator.dead_time_s", "scale", 1.0, 6.0, ("nominal",)),
-    ("valve.fill_rate_kpa_s", "scale", 0.3, 1.5, ("dmsp10", "mas10-itv2050")),
-    ("valve.exhaust_rate_kpa_s", "scale", 0.3, 1.5, ("dmsp10", "mas10-itv2050")),
-    ("valve.dead_time_rise_s", "scale", 0.7, 3.5, ("dmsp10", "mas10-itv2050")),
-    ("valve.dead_time_fall_s", "scale", 0.7, 3.5, ("dmsp10", "mas10-itv2050")),
-    ("sensor.noise_cm", "scale", 1.0, 6.0, PROFILES),
-    ("sensor.adc_bits", "bits", 10, 12, PROFILES),
-    ("creep.frac_contract", "shift", 0.0, 0.2, PROFILES),
-    ("drift.temp_rate_k_per_s", "scale", 1.0, 30.0, PROFILES),
-)
+Ranges = tuple[tuple[str, str, float, float, tuple[str, ...]], ...]   # (path, how, low, high, profiles)
+RANDOM_RANGES: Ranges = tuple((path, how, lo, hi, where) for path, how, where, (lo, hi), _ in _SPANS)
+WIDE_RANGES: Ranges = tuple((path, how, lo, hi, where) for path, how, where, _, (lo, hi) in _SPANS)
 
 
-def random_rigs(seed: int, count: int, ranges: tuple[tuple[str, str, float, float, tuple[str, ...]], ...]
-                = RANDOM_RANGES) -> tuple[Rig, ...]:
+def random_rigs(seed: int, count: int, ranges: Ranges = RANDOM_RANGES) -> tuple[Rig, ...]:
     """`count` rigs drawn with numpy's generator from `seed` (`ranges`: RANDOM_RANGES or WIDE_RANGES)."""
     from hil.scenario import load  # the harness (installed), for each profile's own values
     rng = np.random.default_rng(seed)

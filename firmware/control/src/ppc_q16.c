@@ -258,7 +258,8 @@ int pma_ppc_step_ext_q16(pma_ppc_q16_t *s, pma_q16_t t_s, pma_q16_t x_cm, pma_q1
     if (s->ff_k > 0) {
         /* option: the muscle closes on the reference faster than ff_hold_speed_cm_s */
         const pma_q16_t hold_v = s->ff_hold_v;
-        if (hold_v > 0 && ((o->e_cm > 0 && v_cm_s < -hold_v) || (o->e_cm < 0 && v_cm_s > hold_v))) {
+        if (hold_v > 0 &&
+            ((o->e_cm > 0 && v_cm_s < -hold_v) || (o->e_cm < 0 && v_cm_s > hold_v))) {
             o->flags |= PMA_PPC_FLAG_FF_HOLD;
         }
         if (!pma_ppc_ff_held(o->flags, o->u_law > 0, o->u_law < 0)) {
