@@ -410,7 +410,7 @@ static void test_ff_hold_waits_while_the_muscle_closes(void)
     par.ctrl_mode = PMA_CTRL_MODE_PPC;
     par.ref_kind = PMA_REF_KIND_HOLD;
     par.ref_offset_cm = OFFSET_CM;
-    par.vel_kind = 1;              /* the tracking observer */
+    par.vel_kind = PMA_VELEST_TRACKING;
     par.vel_fc_hz = 20.0f;
     par.ppc_ref_vel = 1;
     par.ppc_fallback = 0;
