@@ -51,7 +51,11 @@ from .summary import PHASE_ARMED, PHASE_IDLE, PHASE_RUNNING, LaneResult, Recorde
 REPO = Path(__file__).resolve().parents[1]
 LIB_PATH = Path(os.environ.get("PMA_OFFLINE_LIB",
                                REPO / "build/host-offline/firmware/targets/offline/libpma_offline.so"))
-API_VERSION = 2                 # PMA_OFFLINE_API_VERSION in pma_offline.h
+API_VERSION = 3                 # PMA_OFFLINE_API_VERSION in pma_offline.h
+# PMA_OFFLINE_ARITH ("f32" or "q16"), where set: the controller slot's arithmetic the library must
+# have been built with (a CI stage that means the Q16.16 build and would otherwise run either)
+ARITH_ENV = "PMA_OFFLINE_ARITH"
+ARITHS = ("f32", "q16")
 HOST_HEARTBEAT_PERIOD_S = 0.1   # as the runner: every 100 ms of control time
 EXTRA_TICKS = 5                 # as the runner: ticks after the run, so a last-tick fault shows
 PMA_OK = 0
@@ -111,6 +115,7 @@ def _load(path: Path) -> ctypes.CDLL:
     u8, u16, i32, dbl = ctypes.c_uint8, ctypes.c_uint16, ctypes.c_int, ctypes.c_double
     sigs: dict[str, tuple[Any, list[Any]]] = {
         "pma_offline_api_version": (i32, []),
+        "pma_offline_ctrl_arith": (ctypes.c_char_p, []),
         "pma_offline_init": (i32, [u8]),
         "pma_offline_param_count": (i32, []),
         "pma_offline_param_id": (i32, [ctypes.c_char_p]),
@@ -140,7 +145,21 @@ def _load(path: Path) -> ctypes.CDLL:
     version = lib.pma_offline_api_version()
     if version != API_VERSION:
         raise OfflineError(f"{path}: API version {version}, this module needs {API_VERSION}: rebuild ({BUILD_HINT})")
+    want = os.environ.get(ARITH_ENV)
+    if want is not None:
+        if want not in ARITHS:
+            raise OfflineError(f"{ARITH_ENV}={want!r}: one of {', '.join(ARITHS)}")
+        have = lib.pma_offline_ctrl_arith().decode()
+        if have != want:
+            raise OfflineError(f"{path}: its controller slot is {have}, {ARITH_ENV} asks for {want} "
+                               f"(the preset host-offline builds f32, host-offline-q16 q16)")
     return lib
+
+
+def ctrl_arith(lib: ctypes.CDLL | None = None) -> str:
+    """The controller slot's arithmetic of the library: "f32" or "q16" (PMA_CTRL_ARITH)."""
+    name: bytes = (lib or library()).pma_offline_ctrl_arith()
+    return name.decode()
 
 
 _LIB: ctypes.CDLL | None = None
@@ -435,7 +454,7 @@ def run_scenarios(variants: list[Scenario], quick: bool, jobs: int = 1,
         summaries.append(summarise(sc, [r.result for r in runs], quick=quick, duration_s=sc.duration(quick),
                                    period_s=period_s, errors=errors, interrupted=False, benchmark=bench,
                                    wall_s=wall_s, out=vout,
-                                   extra={"offline": True, "signals": "signals.npz"}))
+                                   extra={"offline": True, "ctrl_arith": ctrl_arith(), "signals": "signals.npz"}))
     return summaries
 
 

@@ -4,9 +4,9 @@
 # preset's CTest suite (Unity; host with ASan/UBSan; Cortex-M4F, M3, M0 under QEMU),
 # the generated code's freshness, the Python tests (numpy golden reference,
 # protocol and DBC consistency, the offline runs' library layer), the HIL
-# acceptance tests (the paper's experiments, on the real firmware offline), the rig
-# variants beside a bounded libFuzzer run of the CAN frame handler, the hil/with-vcan
-# tests; then
+# acceptance tests (the paper's experiments, on the real firmware offline) and the rig
+# variants, each with the controller slot in float and in Q16.16, beside a bounded
+# libFuzzer run of the CAN frame handler, the hil/with-vcan tests; then
 # side by side in two vcan guests: the integration tests of pma-fw-host and pmactl over
 # vcan and the HIL checks only the CAN path has | the main job's quick variant and the
 # offline runs against it (to the last digit), the tuning session; then the HIL benchmark alone.
@@ -164,6 +164,24 @@ vcan_hil() {
 no_can_pytest() { .venv/bin/python -m pytest -q "${NO_CAN_TESTS[@]}"; }
 pmactl_unit_tests() { .venv/bin/python -m pytest -q host/tests --ignore=host/tests/integration; }
 rig_variants() { .venv/bin/python -m pytest -q hil/tests/test_rig_variants.py hil/tests/test_handover_start.py; }
+# The same offline tests on the controller slot in Q16.16 (PMA_CTRL_ARITH: what the Cortex-M0 and
+# M3 run): the library of the preset host-offline-q16; PMA_OFFLINE_ARITH refuses any other build.
+q16_offline() {
+  PMA_OFFLINE_LIB=$PWD/build/host-offline-q16/firmware/targets/offline/libpma_offline.so PMA_OFFLINE_ARITH=q16 \
+    .venv/bin/python -m pytest -q "$@"
+}
+# Lanes balanced by their measured durations (build/ci-logs/lane*.seconds): pytest 39 s + the Q16.16
+# variants 38 s | pmactl 101 s; the variants 46 s + the Q16.16 acceptance 61 s | fuzz 67 s.
+no_can_pytest_and_q16_variants() {
+  no_can_pytest
+  echo "-- rig variants offline, the Q16.16 slot"
+  q16_offline hil/tests/test_rig_variants.py
+}
+rig_variants_and_q16_acceptance() {
+  rig_variants
+  echo "-- HIL acceptance offline, the Q16.16 slot"
+  q16_offline hil/tests/test_acceptance.py
+}
 fuzz_60s() { bash tools/fuzz.sh 60; }
 
 NO_CAN_TESTS=(tests/golden tests/protocol tests/tools hil/tests/test_rig.py hil/tests/test_rig_profiles.py
@@ -190,12 +208,13 @@ stage "build every preset (tools/build-all.sh)" bash tools/build-all.sh
 for p in host host-q16 cortex-m4f cortex-m4f-q16 cortex-m3 cortex-m0; do
   stage "ctest $p" ctest --preset "$p" -j2
 done
-side_by_side "pytest (no CAN)" no_can_pytest "pmactl unit tests (python-can virtual bus, no CAN)" pmactl_unit_tests
+side_by_side "pytest (no CAN); rig variants offline on the Q16.16 slot (host-offline-q16)" no_can_pytest_and_q16_variants \
+  "pmactl unit tests (python-can virtual bus, no CAN)" pmactl_unit_tests
 stage "HIL acceptance offline (the paper's Cases 1-3, MFAC, PID, load change, constraint, faults; libpma_offline.so)" \
   .venv/bin/python -m pytest -q hil/tests/test_acceptance.py
 # the fuzz run is bounded by time: beside the variants it costs them a little CPU, not its minute
-side_by_side "rig variants offline (Case 3 on rigs the set was not tuned on: no fault, the guarantee or its flagged loss, at most MFAC's error; the hand-over during the start)" \
-  rig_variants "fuzz (libFuzzer on the CAN frame handler, ASan + UBSan, 60 s)" fuzz_60s
+side_by_side "rig variants offline (Case 3 on rigs the set was not tuned on: no fault, the guarantee or its flagged loss, at most MFAC's error; the hand-over during the start); HIL acceptance offline on the Q16.16 slot (host-offline-q16)" \
+  rig_variants_and_q16_acceptance "fuzz (libFuzzer on the CAN frame handler, ASan + UBSan, 60 s)" fuzz_60s
 # not side by side: its SIGINT test needs a shell whose background jobs may receive SIGINT (a
 # background lane starts with SIGINT ignored, and then so does everything it runs)
 stage "hil/with-vcan" bash hil/tests/test_with_vcan.sh

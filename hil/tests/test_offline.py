@@ -135,6 +135,22 @@ def test_an_offline_run_is_deterministic_and_jobs_do_not_change_it(tmp_path):
     assert one["expect_met"] and not one["errors"]
     assert one["controllers"] == two["controllers"]
     assert one["controllers"]["ppc"]["rmste_cm"][0] < 0.3
+    assert one["ctrl_arith"] == offline.ctrl_arith()     # the summary names the slot's arithmetic
+
+
+def test_the_library_names_its_arithmetic_and_a_stated_one_is_checked(monkeypatch):
+    """PMA_OFFLINE_ARITH: a run (a CI stage) that means one build refuses the other."""
+    have = offline.ctrl_arith()
+    assert have in offline.ARITHS
+    other = next(a for a in offline.ARITHS if a != have)
+    monkeypatch.setenv(offline.ARITH_ENV, have)
+    offline._load(offline.LIB_PATH)
+    monkeypatch.setenv(offline.ARITH_ENV, other)
+    with pytest.raises(offline.OfflineError, match=f"controller slot is {have}, {offline.ARITH_ENV} asks for {other}"):
+        offline._load(offline.LIB_PATH)
+    monkeypatch.setenv(offline.ARITH_ENV, "double")
+    with pytest.raises(offline.OfflineError, match="one of f32, q16"):
+        offline._load(offline.LIB_PATH)
 
 
 def test_a_grid_sweeps_firmware_and_rig_values(tmp_path, capsys):

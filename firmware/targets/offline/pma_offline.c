@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "app.h"
+#include "controller.h"
 #include "generated/pma_proto.h"
 #include "params.h"
 #include "pma/status.h"
@@ -38,6 +39,15 @@ static void keep_for_host(const pma_can_frame_t *f)
 int pma_offline_api_version(void)
 {
     return PMA_OFFLINE_API_VERSION;
+}
+
+const char *pma_offline_ctrl_arith(void)
+{
+#if PMA_CTRL_Q16
+    return "q16";
+#else
+    return "f32";
+#endif
 }
 
 /* ------------------------------------------------------------- frames -- */

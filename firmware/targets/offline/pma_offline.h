@@ -31,7 +31,7 @@
 #include <stdint.h>
 
 /* Bumped whenever a function or a struct below changes (hil/offline.py checks it). */
-#define PMA_OFFLINE_API_VERSION 2
+#define PMA_OFFLINE_API_VERSION 3
 
 /* What one tick sent: the PLANT_ACTUATOR frame decoded, and the telemetry
  * frames if the tick sent them (telem_frames: bit i = TELEM_A + i, the values
@@ -64,6 +64,10 @@ typedef struct pma_offline_tick {
 } pma_offline_tick_t;
 
 int pma_offline_api_version(void);
+
+/* The controller slot's arithmetic this library was built with (PMA_CTRL_ARITH,
+ * docs/fixed-point.md): "f32" (preset host-offline) or "q16" (host-offline-q16). */
+const char *pma_offline_ctrl_arith(void);
 
 /* A fresh node: the fake port reset (clock 0) and initialised, the
  * application started with its defaults as node node_id (0..15), the BOOT
