@@ -146,8 +146,9 @@ def render_summary(run_dir: Path) -> str:
 def print_summary(summary: dict[str, Any]) -> None:
     q = " (quick)" if summary.get("quick") else ""
     print(f"\n== {summary['scenario']}{q}: {summary['title']}")
+    slot = f", the controller slot in {summary['ctrl_arith']} (offline)" if summary.get("ctrl_arith") else ""
     print(f"   {summary['duration_s']:g} s of control time at {1.0 / summary['period_s']:g} Hz, "
-          f"{summary.get('wall_s', 0):.0f} s wall")
+          f"{summary.get('wall_s', 0):.0f} s wall{slot}")
     if summary["rmste"]:
         print()
         print(rmste_table(summary))

@@ -165,6 +165,11 @@ def test_a_grid_sweeps_firmware_and_rig_values(tmp_path, capsys):
     assert "ppc.c=16 rig:load.bias_force_n=5" in capsys.readouterr().out
 
 
+def test_the_report_names_the_controller_slots_arithmetic(capsys):
+    assert main(["offline", "case2b", "--controller", "ppc-paper", "--duration", "0.5"]) == 0
+    assert f"the controller slot in {offline.ctrl_arith()} (offline)" in capsys.readouterr().out
+
+
 # --------------------------------- options checked as a whole before anything runs (exit 2) --
 @pytest.mark.parametrize("argv, message", [
     (["--seed", "-1"], "--seed: expected an integer >= 0"),
