@@ -149,7 +149,7 @@ def _load(path: Path) -> ctypes.CDLL:
     if want is not None:
         if want not in ARITHS:
             raise OfflineError(f"{ARITH_ENV}={want!r}: one of {', '.join(ARITHS)}")
-        have = lib.pma_offline_ctrl_arith().decode()
+        have = ctrl_arith(lib)
         if have != want:
             raise OfflineError(f"{path}: its controller slot is {have}, {ARITH_ENV} asks for {want} "
                                f"(the preset host-offline builds f32, host-offline-q16 q16)")
